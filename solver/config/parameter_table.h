@@ -1,0 +1,49 @@
+#pragma once
+// The parameter table: every scenario field once, as data — path, kind, unit, default,
+// allowed range or choices, documentation, and an accessor into config::Scenario.
+// parse_scenario(), default_scenario(), to_json(), apply_override() and the generated
+// docs/parameters.md all read this one table.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "solver/config/scenario.h"
+
+namespace systole::config {
+
+enum class Kind { kReal, kInt, kBool, kChoice, kRealList, kChoiceList };
+
+struct Param {
+  std::string_view path;  // dotted, as in the proto/JSON: "tissue.lv.fung_c_pa"
+  Kind kind;
+  std::string_view unit;  // "" for nondimensional
+  double default_number;  // kReal, kInt, kBool (0/1)
+  double min, max;        // inclusive range for kReal, kInt and kRealList elements
+  std::string_view default_choice;           // kChoice
+  std::vector<std::string_view> choices;     // kChoice, kChoiceList
+  std::string_view doc;
+  // Exactly the accessor matching `kind` is set.
+  double& (*real)(Scenario&) = nullptr;
+  int& (*integer)(Scenario&) = nullptr;
+  bool& (*boolean)(Scenario&) = nullptr;
+  std::string& (*choice)(Scenario&) = nullptr;
+  std::vector<double>& (*real_list)(Scenario&) = nullptr;
+  std::vector<std::string>& (*choice_list)(Scenario&) = nullptr;
+  // A range bound is open (exclusive) when this is set: e.g. field_phases in [0, 1).
+  bool max_exclusive = false;
+  bool min_exclusive = false;
+};
+
+// The table, in proto field order.
+const std::vector<Param>& parameter_table();
+
+// nullptr if no such path.
+const Param* find_parameter(std::string_view path);
+
+// Human-readable allowed values: "[20, 240]", "one of: loose, strong", ...
+std::string describe_allowed(const Param& param);
+
+// Markdown reference of every parameter (docs/parameters.md).
+std::string parameters_markdown();
+
+}  // namespace systole::config

@@ -1,0 +1,333 @@
+#include "solver/config/scenario.h"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "solver/config/geometry_rules.h"
+#include "solver/config/parameter_table.h"
+#include "solver/core/errors.h"
+
+namespace systole::config {
+
+const std::vector<std::string>& known_scenes() {
+  static const std::vector<std::string> scenes{"lumped",           "geometry", "electro",
+                                               "mechanics",        "electromechanics",
+                                               "fluid",            "fsi",      "fsei"};
+  return scenes;
+}
+
+// Updated as each scene lands (its issue); see solver/scene/.
+const std::vector<std::string>& implemented_scenes() {
+  static const std::vector<std::string> scenes{"lumped"};
+  return scenes;
+}
+
+namespace {
+
+std::string show(const nlohmann::json& value) {
+  std::string s = value.dump();
+  if (s.size() > 80) s = s.substr(0, 77) + "...";
+  return s;
+}
+
+bool is_integral(double v) { return std::isfinite(v) && std::floor(v) == v; }
+
+bool in_range(const Param& p, double v) {
+  if (!std::isfinite(v)) return false;
+  if (p.min_exclusive ? !(v > p.min) : !(v >= p.min)) return false;
+  if (p.max_exclusive ? !(v < p.max) : !(v <= p.max)) return false;
+  return true;
+}
+
+// Stores `value` into the field described by `p`, or appends a message to `errors`.
+void assign(const Param& p, const nlohmann::json& value, Scenario& s,
+            std::vector<std::string>& errors) {
+  const std::string field(p.path);
+  auto out_of_range = [&](const nlohmann::json& v) {
+    errors.push_back(field + " = " + show(v) + " is out of range " + describe_allowed(p));
+  };
+  switch (p.kind) {
+    case Kind::kReal: {
+      if (!value.is_number()) {
+        errors.push_back(field + " = " + show(value) + " is not a number; allowed " +
+                         describe_allowed(p));
+        return;
+      }
+      const double v = value.get<double>();
+      if (!in_range(p, v)) return out_of_range(value);
+      p.real(s) = v;
+      return;
+    }
+    case Kind::kInt: {
+      if (!value.is_number() || !is_integral(value.get<double>())) {
+        errors.push_back(field + " = " + show(value) + " is not an integer; allowed " +
+                         describe_allowed(p));
+        return;
+      }
+      const double v = value.get<double>();
+      if (!in_range(p, v)) return out_of_range(value);
+      p.integer(s) = static_cast<int>(v);
+      return;
+    }
+    case Kind::kBool:
+      if (!value.is_boolean()) {
+        errors.push_back(field + " = " + show(value) + " is not a boolean; allowed true or false");
+        return;
+      }
+      p.boolean(s) = value.get<bool>();
+      return;
+    case Kind::kChoice: {
+      if (!value.is_string()) {
+        errors.push_back(field + " = " + show(value) + " is not a string; allowed " +
+                         describe_allowed(p));
+        return;
+      }
+      const std::string v = value.get<std::string>();
+      for (auto c : p.choices)
+        if (c == v) {
+          p.choice(s) = v;
+          return;
+        }
+      errors.push_back("unknown " + field + " '" + v + "'; known: " +
+                       describe_allowed(p).substr(std::string("one of: ").size()));
+      return;
+    }
+    case Kind::kRealList: {
+      if (!value.is_array()) {
+        errors.push_back(field + " = " + show(value) + " is not a list of numbers");
+        return;
+      }
+      std::vector<double> list;
+      for (const auto& e : value) {
+        if (!e.is_number() || !in_range(p, e.get<double>())) {
+          errors.push_back(field + " element " + show(e) + " is out of range " + describe_allowed(p));
+          return;
+        }
+        list.push_back(e.get<double>());
+      }
+      p.real_list(s) = list;
+      return;
+    }
+    case Kind::kChoiceList: {
+      if (!value.is_array()) {
+        errors.push_back(field + " = " + show(value) + " is not a list of strings");
+        return;
+      }
+      std::vector<std::string> list;
+      for (const auto& e : value) {
+        bool ok = false;
+        if (e.is_string())
+          for (auto c : p.choices) ok = ok || c == e.get<std::string>();
+        if (!ok) {
+          errors.push_back(field + " element " + show(e) + " is not allowed; " + describe_allowed(p));
+          return;
+        }
+        list.push_back(e.get<std::string>());
+      }
+      p.choice_list(s) = list;
+      return;
+    }
+  }
+}
+
+// Known child names of an object path, for "unknown field" messages.
+std::string known_children(const std::string& prefix) {
+  std::set<std::string> names;
+  for (const Param& p : parameter_table()) {
+    std::string_view path = p.path;
+    if (!prefix.empty()) {
+      if (path.substr(0, prefix.size() + 1) != prefix + ".") continue;
+      path.remove_prefix(prefix.size() + 1);
+    }
+    names.insert(std::string(path.substr(0, path.find('.'))));
+  }
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+bool is_object_prefix(const std::string& path) {
+  for (const Param& p : parameter_table())
+    if (p.path.substr(0, path.size() + 1) == path + ".") return true;
+  return false;
+}
+
+void walk(const nlohmann::json& node, const std::string& prefix, Scenario& s,
+          std::vector<std::string>& errors) {
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    const std::string path = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (const Param* p = find_parameter(path)) {
+      if (!it.value().is_null()) assign(*p, it.value(), s, errors);
+    } else if (is_object_prefix(path)) {
+      if (it.value().is_object())
+        walk(it.value(), path, s, errors);
+      else if (!it.value().is_null())
+        errors.push_back(path + " = " + show(it.value()) + " must be an object with fields: " +
+                         known_children(path));
+    } else {
+      errors.push_back("unknown field '" + path + "'; known fields" +
+                       (prefix.empty() ? std::string("") : " of " + prefix) + ": " +
+                       known_children(prefix));
+    }
+  }
+}
+
+// Cross-field rules, after every field is individually in range.
+void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
+  auto fail = [&](const std::string& m) { errors.push_back(m); };
+  const double period_ms = s.period_ms();
+  std::ostringstream m;
+  if (s.av_delay_ms >= period_ms) {
+    m << "av_delay_ms = " << s.av_delay_ms << " must be shorter than the cardiac period "
+      << period_ms << " ms at heart_rate_bpm = " << s.heart_rate_bpm;
+    fail(m.str());
+    m.str("");
+  }
+  for (const auto& [name, c] : {std::pair{"lv", s.lumped.lv}, std::pair{"la", s.lumped.la}}) {
+    if (c.emax_mmhg_per_ml <= c.emin_mmhg_per_ml) {
+      m << "lumped." << name << ".emax_mmhg_per_ml = " << c.emax_mmhg_per_ml
+        << " must exceed lumped." << name << ".emin_mmhg_per_ml = " << c.emin_mmhg_per_ml;
+      fail(m.str());
+      m.str("");
+    }
+    // Activation durations scale with sqrt(period / 857 ms) (solver/lumped, ours): the
+    // scaled twitch must fit in one period.
+    const double scale = std::sqrt(period_ms / (60000.0 / 70.0));
+    const double twitch_ms = (c.contraction_ms + c.relaxation_ms) * scale;
+    if (twitch_ms >= period_ms) {
+      m << "lumped." << name << ".contraction_ms + relaxation_ms = "
+        << c.contraction_ms + c.relaxation_ms << " ms (scaled to " << twitch_ms
+        << " ms at heart_rate_bpm = " << s.heart_rate_bpm << ") must be shorter than the period "
+        << period_ms << " ms";
+      fail(m.str());
+      m.str("");
+    }
+  }
+  check_geometry_rules(s.geometry, errors);
+  if (!s.outputs.field_phases.empty() && s.outputs.fields.empty())
+    fail("outputs.field_phases is set but outputs.fields is empty: name the fields to write");
+  bool implemented = false;
+  for (const auto& n : implemented_scenes()) implemented = implemented || n == s.scene;
+  if (!implemented) {
+    std::string list;
+    for (const auto& n : implemented_scenes()) list += (list.empty() ? "" : ", ") + n;
+    fail("scene '" + s.scene + "' is not implemented yet; implemented: " + list);
+  }
+}
+
+std::string join_errors(const std::vector<std::string>& errors) {
+  std::string out = errors.size() == 1 ? "invalid scenario: " : "invalid scenario (" +
+                                                                   std::to_string(errors.size()) +
+                                                                   " problems):\n  ";
+  for (size_t i = 0; i < errors.size(); ++i) out += (i ? "\n  " : "") + errors[i];
+  return out;
+}
+
+}  // namespace
+
+Scenario default_scenario() {
+  Scenario s{};
+  for (const Param& p : parameter_table()) {
+    switch (p.kind) {
+      case Kind::kReal: p.real(s) = p.default_number; break;
+      case Kind::kInt: p.integer(s) = static_cast<int>(p.default_number); break;
+      case Kind::kBool: p.boolean(s) = p.default_number != 0; break;
+      case Kind::kChoice: p.choice(s) = std::string(p.default_choice); break;
+      case Kind::kRealList: p.real_list(s).clear(); break;
+      case Kind::kChoiceList: p.choice_list(s).clear(); break;
+    }
+  }
+  return s;
+}
+
+Scenario parse_scenario(const nlohmann::json& document) {
+  if (!document.is_object())
+    throw InputError("invalid scenario: the document must be a JSON object, got " + show(document));
+  Scenario s = default_scenario();
+  std::vector<std::string> errors;
+  walk(document, "", s, errors);
+  if (errors.empty()) check_consistency(s, errors);
+  if (!errors.empty()) throw InputError(join_errors(errors));
+  return s;
+}
+
+nlohmann::json to_json(const Scenario& scenario) {
+  Scenario s = scenario;  // accessors take non-const references
+  nlohmann::json out = nlohmann::json::object();
+  for (const Param& p : parameter_table()) {
+    nlohmann::json::json_pointer ptr("/" + [&] {
+      std::string path(p.path);
+      for (char& c : path)
+        if (c == '.') c = '/';
+      return path;
+    }());
+    switch (p.kind) {
+      case Kind::kReal: out[ptr] = p.real(s); break;
+      case Kind::kInt: out[ptr] = p.integer(s); break;
+      case Kind::kBool: out[ptr] = p.boolean(s); break;
+      case Kind::kChoice: out[ptr] = p.choice(s); break;
+      case Kind::kRealList: out[ptr] = p.real_list(s); break;
+      case Kind::kChoiceList: out[ptr] = p.choice_list(s); break;
+    }
+  }
+  return out;
+}
+
+void apply_override(nlohmann::json& document, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("--set '" + assignment + "': expected path.to.field=value");
+  const std::string path = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  const Param* p = find_parameter(path);
+  if (p == nullptr) {
+    const auto dot = path.rfind('.');
+    const std::string prefix = dot == std::string::npos ? "" : path.substr(0, dot);
+    throw InputError("--set: unknown field '" + path + "'; known fields" +
+                     (prefix.empty() ? std::string("") : " of " + prefix) + ": " +
+                     known_children(is_object_prefix(prefix) ? prefix : ""));
+  }
+  nlohmann::json value;
+  auto number = [&](const std::string& t) -> nlohmann::json {
+    try {
+      size_t used = 0;
+      const double v = std::stod(t, &used);
+      if (used == t.size()) return is_integral(v) && p->kind == Kind::kInt ? nlohmann::json(static_cast<long long>(v)) : nlohmann::json(v);
+    } catch (const std::exception&) {
+    }
+    return nlohmann::json(t);  // kept as text: parse_scenario reports the type error
+  };
+  auto split = [](const std::string& t) {
+    std::vector<std::string> parts;
+    std::string cur;
+    std::istringstream in(t);
+    while (std::getline(in, cur, ','))
+      if (!cur.empty()) parts.push_back(cur);
+    return parts;
+  };
+  switch (p->kind) {
+    case Kind::kReal:
+    case Kind::kInt: value = number(text); break;
+    case Kind::kBool:
+      value = text == "true" ? nlohmann::json(true)
+              : text == "false" ? nlohmann::json(false)
+                                : nlohmann::json(text);
+      break;
+    case Kind::kChoice: value = text; break;
+    case Kind::kRealList:
+      value = nlohmann::json::array();
+      for (const auto& part : split(text)) value.push_back(number(part));
+      break;
+    case Kind::kChoiceList:
+      value = nlohmann::json::array();
+      for (const auto& part : split(text)) value.push_back(part);
+      break;
+  }
+  std::string pointer = "/" + path;
+  for (char& c : pointer)
+    if (c == '.') c = '/';
+  document[nlohmann::json::json_pointer(pointer)] = value;
+}
+
+}  // namespace systole::config

@@ -1,0 +1,144 @@
+#pragma once
+// Typed, validated scenario: what every scene reads. Built only by parse_scenario() (or
+// default_scenario()), so a Scenario object is always complete and within range.
+//
+// Field names mirror proto/systole/v1/scenario.proto (same paths, same units in the names).
+// Defaults, units, ranges and docs are NOT written here: they live once, in the parameter
+// table (parameter_table.cc). No member initialisers on purpose.
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace systole::config {
+
+struct FungTissue {
+  double fung_c_pa;
+  double alpha_f;
+  double alpha_c;
+};
+
+struct Tissue {
+  FungTissue lv, la, mitral_leaflets, aortic_leaflets, aorta;
+  double density_g_per_ml;
+  double poisson_ratio;
+  double active_tension_k_kpa;
+};
+
+struct Geometry {
+  double lv_short_axis_mm, lv_long_axis_mm, lv_wall_mm, lv_volume_ml;
+  double la_volume_ml, la_wall_mm;
+  double mitral_diameter_mm, aortic_diameter_mm;
+  double mitral_leaflet_length_mm, mitral_leaflet_thickness_mm, aortic_leaflet_thickness_mm;
+  double aortic_root_diameter_mm, aortic_arch_diameter_mm, aortic_descending_diameter_mm;
+  double aorta_wall_mm;
+  double pulmonary_vein_diameter_mm;
+  double lv_fibre_angle_deg;
+  double target_edge_mm;
+  double marker_spacing_fraction;
+};
+
+struct Stimulus {
+  double duration_ms;
+  double amplitude_ua_per_cm2;
+};
+
+struct Electro {
+  std::string model;
+  double surface_to_volume_per_cm;
+  double membrane_capacitance_uf_per_cm2;
+  double sigma_e_fibre_ms_per_cm, sigma_e_cross_ms_per_cm;
+  double sigma_i_fibre_ms_per_cm, sigma_i_cross_ms_per_cm;
+  std::string lv_cell_model, la_cell_model;
+  Stimulus stimulus;
+};
+
+struct Fluid {
+  double kinematic_viscosity_m2_per_s;
+  std::string viscosity_model;
+  int nx, ny, nz;
+  double box_x_mm, box_y_mm, box_z_mm;
+  double cfl;
+  double max_dt_ms;
+  double darcy_permeability;
+};
+
+struct Chamber {
+  double emax_mmhg_per_ml;
+  double emin_mmhg_per_ml;
+  double v0_ml;
+  double contraction_ms;
+  double relaxation_ms;
+};
+
+struct Lumped {
+  Chamber lv, la;
+  double mitral_resistance_mmhg_s_per_ml;
+  double aortic_resistance_mmhg_s_per_ml;
+  double mitral_inertance_mmhg_s2_per_ml;
+  double aortic_inertance_mmhg_s2_per_ml;
+  double valve_backflow_conductance_fraction;
+  double aortic_characteristic_impedance_mmhg_s_per_ml;
+  double systemic_resistance_mmhg_s_per_ml;
+  double systemic_compliance_ml_per_mmhg;
+  double pulmonary_venous_compliance_ml_per_mmhg;
+  double pulmonary_venous_resistance_mmhg_s_per_ml;
+  double stressed_blood_volume_ml;
+  double time_step_ms;
+};
+
+struct Coupling {
+  std::string mode;
+  double strong_tolerance;
+  int strong_max_iterations;
+};
+
+struct Outputs {
+  bool metrics;
+  bool time_series;
+  double time_series_interval_ms;
+  int time_series_last_beats;
+  std::vector<std::string> fields;
+  std::vector<double> field_phases;
+};
+
+struct Scenario {
+  std::string scene;
+  double heart_rate_bpm;
+  int beats;
+  double av_delay_ms;
+  double periodicity_tolerance;
+  Tissue tissue;
+  Geometry geometry;
+  Electro electro;
+  Fluid fluid;
+  Lumped lumped;
+  Coupling coupling;
+  Outputs outputs;
+
+  double period_ms() const { return 60000.0 / heart_rate_bpm; }
+};
+
+// Every default from the parameter table: the seed's healthy left heart at 70 bpm.
+Scenario default_scenario();
+
+// Parses a scenario from JSON with snake_case field names (proto field names). Missing fields
+// take their defaults; unknown fields, wrong types, out-of-range values and inconsistent
+// combinations are all collected and thrown together as one systole::InputError whose
+// message has one line per problem, each naming the field, the value and what is allowed.
+Scenario parse_scenario(const nlohmann::json& document);
+
+// The complete scenario (every field, defaults expanded) as JSON: provenance and caching key.
+nlohmann::json to_json(const Scenario& scenario);
+
+// Applies one `path.to.field=value` override to a JSON document (before parse_scenario).
+// The path must name a field of the parameter table; the value is converted to the field's
+// type (numbers, true/false, strings, comma-separated lists). Throws InputError otherwise.
+void apply_override(nlohmann::json& document, const std::string& assignment);
+
+// Scenes known to the project and the ones this build can run. A known but unimplemented
+// scene is rejected with a message listing the implemented ones (never a silent fallback).
+const std::vector<std::string>& known_scenes();
+const std::vector<std::string>& implemented_scenes();
+
+}  // namespace systole::config

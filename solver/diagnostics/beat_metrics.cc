@@ -1,0 +1,206 @@
+#include "solver/diagnostics/beat_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace systole::diagnostics {
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("diagnostics: " + what);
+}
+
+void check_time(std::span<const double> time_s) {
+  require(time_s.size() >= 2, "a beat needs at least 2 samples, got " +
+                                  std::to_string(time_s.size()));
+  for (size_t i = 1; i < time_s.size(); ++i)
+    require(time_s[i] > time_s[i - 1], "time_s must be strictly increasing (sample " +
+                                           std::to_string(i) + ")");
+}
+
+void check_same_size(std::span<const double> time_s, std::span<const double> v,
+                     const char* name) {
+  require(v.size() == time_s.size(), std::string(name) + " has " + std::to_string(v.size()) +
+                                         " samples, time_s has " +
+                                         std::to_string(time_s.size()));
+}
+
+double peak_abs(std::span<const double> v) {
+  double m = 0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+
+}  // namespace
+
+double stroke_volume_ml(double edv_ml, double esv_ml) { return edv_ml - esv_ml; }
+
+double ejection_fraction_percent(double edv_ml, double esv_ml) {
+  return edv_ml > 0 ? 100.0 * (edv_ml - esv_ml) / edv_ml : 0.0;
+}
+
+double cardiac_output_l_min(double stroke_volume_ml, double heart_rate_bpm) {
+  return stroke_volume_ml * heart_rate_bpm / 1000.0;  // ml/beat * beats/min -> l/min
+}
+
+double integrate(std::span<const double> time_s, std::span<const double> values) {
+  check_time(time_s);
+  check_same_size(time_s, values, "values");
+  double sum = 0;
+  for (size_t i = 1; i < time_s.size(); ++i)
+    sum += 0.5 * (values[i] + values[i - 1]) * (time_s[i] - time_s[i - 1]);
+  return sum;
+}
+
+double time_average(std::span<const double> time_s, std::span<const double> values) {
+  return integrate(time_s, values) / (time_s.back() - time_s.front());
+}
+
+double value_at(std::span<const double> time_s, std::span<const double> values, double t) {
+  check_same_size(time_s, values, "values");
+  require(!time_s.empty(), "value_at needs samples");
+  if (t <= time_s.front()) return values.front();
+  if (t >= time_s.back()) return values.back();
+  const size_t i = std::upper_bound(time_s.begin(), time_s.end(), t) - time_s.begin();
+  const double w = (t - time_s[i - 1]) / (time_s[i] - time_s[i - 1]);
+  return values[i - 1] + w * (values[i] - values[i - 1]);
+}
+
+std::optional<double> first_crossing(std::span<const double> time_s,
+                                     std::span<const double> values, double level,
+                                     Crossing direction) {
+  check_same_size(time_s, values, "values");
+  for (size_t i = 1; i < values.size(); ++i) {
+    const double a = values[i - 1], b = values[i];
+    const bool hit = direction == Crossing::kUpward ? (a <= level && b > level)
+                                                    : (a > level && b <= level);
+    if (!hit) continue;
+    const double s = (level - a) / (b - a);  // b != a because the inequalities are strict
+    return time_s[i - 1] + s * (time_s[i] - time_s[i - 1]);
+  }
+  return std::nullopt;
+}
+
+ValveEvents valve_events(std::span<const double> time_s, std::span<const double> flow_ml_s,
+                         double beat_start_s, double period_s, double threshold_fraction) {
+  require(period_s > 0, "period_s must be positive");
+  const double level = threshold_fraction * peak_abs(flow_ml_s);
+  ValveEvents e;
+  if (auto t = first_crossing(time_s, flow_ml_s, level, Crossing::kUpward))
+    e.open_phase = (*t - beat_start_s) / period_s;
+  if (auto t = first_crossing(time_s, flow_ml_s, level, Crossing::kDownward))
+    e.close_phase = (*t - beat_start_s) / period_s;
+  return e;
+}
+
+BeatMetrics compute_beat_metrics(const BeatSamples& b) {
+  check_time(b.time_s);
+  check_same_size(b.time_s, b.lv_volume_ml, "lv_volume_ml");
+  check_same_size(b.time_s, b.lv_pressure_mmhg, "lv_pressure_mmhg");
+  check_same_size(b.time_s, b.aortic_pressure_mmhg, "aortic_pressure_mmhg");
+  check_same_size(b.time_s, b.mitral_flow_ml_s, "mitral_flow_ml_s");
+  check_same_size(b.time_s, b.aortic_flow_ml_s, "aortic_flow_ml_s");
+  require(b.period_s > 0, "period_s must be positive");
+  auto phase = [&](double t) { return (t - b.beat_start_s) / b.period_s; };
+
+  BeatMetrics m;
+  m.heart_rate_bpm = 60.0 / b.period_s;
+  m.aortic_valve = valve_events(b.time_s, b.aortic_flow_ml_s, b.beat_start_s, b.period_s,
+                                b.valve_threshold_fraction);
+  m.mitral_valve = valve_events(b.time_s, b.mitral_flow_ml_s, b.beat_start_s, b.period_s,
+                                b.valve_threshold_fraction);
+  const auto& v = b.lv_volume_ml;
+  auto at_phase_or = [&](const std::optional<double>& ph, size_t fallback, double& volume,
+                         double& pressure) {
+    if (ph) {
+      const double t = b.beat_start_s + *ph * b.period_s;
+      volume = value_at(b.time_s, v, t);
+      pressure = value_at(b.time_s, b.lv_pressure_mmhg, t);
+    } else {
+      volume = v[fallback];
+      pressure = b.lv_pressure_mmhg[fallback];
+    }
+  };
+  at_phase_or(m.mitral_valve.close_phase, std::max_element(v.begin(), v.end()) - v.begin(),
+              m.edv_ml, m.lv_end_diastolic_pressure_mmhg);
+  at_phase_or(m.aortic_valve.close_phase, std::min_element(v.begin(), v.end()) - v.begin(),
+              m.esv_ml, m.lv_end_systolic_pressure_mmhg);
+  m.stroke_volume_ml = stroke_volume_ml(m.edv_ml, m.esv_ml);
+  m.ejection_fraction_percent = ejection_fraction_percent(m.edv_ml, m.esv_ml);
+  m.cardiac_output_l_min = cardiac_output_l_min(m.stroke_volume_ml, m.heart_rate_bpm);
+  m.aortic_forward_volume_ml = integrate(b.time_s, b.aortic_flow_ml_s);
+  m.mitral_inflow_volume_ml = integrate(b.time_s, b.mitral_flow_ml_s);
+
+  const auto& p = b.lv_pressure_mmhg;
+  const size_t i_pk = std::max_element(p.begin(), p.end()) - p.begin();
+  m.lv_peak_pressure_mmhg = p[i_pk];
+  m.lv_peak_pressure_phase = phase(b.time_s[i_pk]);
+  const auto& pa = b.aortic_pressure_mmhg;
+  m.aortic_pressure_max_mmhg = *std::max_element(pa.begin(), pa.end());
+  m.aortic_pressure_min_mmhg = *std::min_element(pa.begin(), pa.end());
+  m.aortic_pressure_mean_mmhg = time_average(b.time_s, pa);
+  m.mitral_peak_flow_ml_s =
+      *std::max_element(b.mitral_flow_ml_s.begin(), b.mitral_flow_ml_s.end());
+  m.aortic_peak_flow_ml_s = *std::max_element(b.aortic_flow_ml_s.begin(), b.aortic_flow_ml_s.end());
+
+  // E and A waves: local maxima of the mitral flow after the mitral valve opens.
+  if (m.mitral_valve.open_phase) {
+    const double t_open = b.beat_start_s + *m.mitral_valve.open_phase * b.period_s;
+    const auto& q = b.mitral_flow_ml_s;
+    const double floor = 0.1 * m.mitral_peak_flow_ml_s;
+    std::vector<size_t> peaks;
+    for (size_t i = 1; i + 1 < q.size(); ++i) {
+      if (b.time_s[i] < t_open) continue;
+      if (q[i] > floor && q[i] >= q[i - 1] && q[i] > q[i + 1]) peaks.push_back(i);
+    }
+    if (!peaks.empty()) {
+      m.mitral_e_peak_phase = phase(b.time_s[peaks.front()]);
+      m.mitral_e_peak_flow_ml_s = q[peaks.front()];
+      if (peaks.size() >= 2) {
+        m.mitral_a_peak_phase = phase(b.time_s[peaks.back()]);
+        m.mitral_a_peak_flow_ml_s = q[peaks.back()];
+      }
+    }
+  }
+  return m;
+}
+
+std::map<std::string, double> to_map(const BeatMetrics& m) {
+  std::map<std::string, double> out{
+      {"heart_rate_bpm", m.heart_rate_bpm},
+      {"edv_ml", m.edv_ml},
+      {"esv_ml", m.esv_ml},
+      {"stroke_volume_ml", m.stroke_volume_ml},
+      {"ejection_fraction_percent", m.ejection_fraction_percent},
+      {"cardiac_output_l_min", m.cardiac_output_l_min},
+      {"aortic_forward_volume_ml", m.aortic_forward_volume_ml},
+      {"mitral_inflow_volume_ml", m.mitral_inflow_volume_ml},
+      {"lv_end_diastolic_pressure_mmhg", m.lv_end_diastolic_pressure_mmhg},
+      {"lv_end_systolic_pressure_mmhg", m.lv_end_systolic_pressure_mmhg},
+      {"lv_peak_pressure_mmhg", m.lv_peak_pressure_mmhg},
+      {"lv_peak_pressure_phase", m.lv_peak_pressure_phase},
+      {"aortic_pressure_max_mmhg", m.aortic_pressure_max_mmhg},
+      {"aortic_pressure_min_mmhg", m.aortic_pressure_min_mmhg},
+      {"aortic_pressure_mean_mmhg", m.aortic_pressure_mean_mmhg},
+      {"mitral_peak_flow_ml_s", m.mitral_peak_flow_ml_s},
+      {"aortic_peak_flow_ml_s", m.aortic_peak_flow_ml_s},
+  };
+  auto put = [&](const char* key, const std::optional<double>& v) {
+    if (v) out[key] = *v;
+  };
+  put("aortic_valve_open_phase", m.aortic_valve.open_phase);
+  put("aortic_valve_close_phase", m.aortic_valve.close_phase);
+  put("mitral_valve_open_phase", m.mitral_valve.open_phase);
+  put("mitral_valve_close_phase", m.mitral_valve.close_phase);
+  put("mitral_e_peak_phase", m.mitral_e_peak_phase);
+  put("mitral_e_peak_flow_ml_s", m.mitral_e_peak_flow_ml_s);
+  put("mitral_a_peak_phase", m.mitral_a_peak_phase);
+  put("mitral_a_peak_flow_ml_s", m.mitral_a_peak_flow_ml_s);
+  if (m.mitral_e_peak_flow_ml_s && m.mitral_a_peak_flow_ml_s && *m.mitral_a_peak_flow_ml_s > 0)
+    out["mitral_e_to_a_ratio"] = *m.mitral_e_peak_flow_ml_s / *m.mitral_a_peak_flow_ml_s;
+  return out;
+}
+
+}  // namespace systole::diagnostics

@@ -1,0 +1,33 @@
+#pragma once
+// The composition root: a scenario names a scene, and the scene assembles exactly the
+// physics modules it needs. Today: "lumped" (0-D closed-loop left heart, solver/lumped).
+// Every rank of an MPI worker calls run() with the same scenario; RunControl is how the
+// caller sees progress and asks for a stop.
+#include <stdexcept>
+
+#include "solver/config/scenario.h"
+#include "solver/core/run_result.h"
+
+namespace systole::scene {
+
+class RunControl {
+ public:
+  virtual ~RunControl() = default;
+  // Called on every rank at the same points of the run (at least once per beat).
+  virtual void on_progress(const ProgressReport& report) = 0;
+  // Collective: every rank calls it at the same points and gets the same answer.
+  virtual bool cancel_requested() = 0;
+};
+
+// Thrown by run() when RunControl::cancel_requested() said so; nothing is reported.
+class Cancelled : public std::runtime_error {
+ public:
+  Cancelled() : std::runtime_error("run cancelled") {}
+};
+
+// Runs the scenario's scene to completion. Throws Cancelled, systole::InstabilityError (a run
+// that blew up, with its diagnosis; never a NaN result), or systole::InputError.
+// Adds metrics["wall_time_s"] (this run's wall-clock time).
+RunResult run(const config::Scenario& scenario, RunControl& control);
+
+}  // namespace systole::scene

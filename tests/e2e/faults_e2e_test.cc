@@ -1,0 +1,112 @@
+// Fault tolerance end to end: kill -9 a worker mid-job, kill -9 the server mid-run, cancel a
+// running job. Each test has its own server, SQLite file and workers.
+#include "tests/e2e/harness.h"
+
+namespace systole::e2e {
+namespace {
+
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+bool has_progress(ServerProcess& server, const std::string& id) {
+  const v1::Job job = get_job(server, id);
+  return job.state() == v1::RUNNING && job.has_progress() && job.progress().beat() >= 2;
+}
+
+TEST(FaultsE2E, CancelRunningJobWithinFiveSeconds) {
+  const fs::path dir = make_temp_dir("cancel");
+  {
+    ServerProcess server(dir, 1, 2);
+    const std::string id = submit(server, slow_scenario(1000));
+    ASSERT_TRUE(wait_until([&] { return has_progress(server, id); }, seconds(60), milliseconds(100))) << server.log();
+    const auto start = std::chrono::steady_clock::now();
+    v1::CancelJobRequest request;
+    request.set_id(id);
+    v1::Job job;
+    auto context = deadline_context();
+    ASSERT_TRUE(server.stub().CancelJob(context.get(), request, &job).ok());
+    EXPECT_TRUE(job.cancel_requested());
+    ASSERT_TRUE(wait_for_state(server, id, v1::CANCELLED, seconds(5))) << server.log();
+    const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_LT(took_s, 5.0);
+    // The worker is free again: the next job runs.
+    const std::string next = submit(server, {{"scene", "lumped"}, {"beats", 2}, {"periodicity_tolerance", 0}});
+    EXPECT_TRUE(wait_for_state(server, next, v1::SUCCEEDED, seconds(60))) << server.log();
+    // Cancelling a finished job is refused and changes nothing.
+    v1::CancelJobRequest again;
+    again.set_id(next);
+    auto ctx = deadline_context();
+    EXPECT_EQ(server.stub().CancelJob(ctx.get(), again, &job).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+    EXPECT_EQ(get_job(server, next).state(), v1::SUCCEEDED);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(FaultsE2E, KilledWorkerJobIsRequeuedAndCompletes) {
+  const fs::path dir = make_temp_dir("killworker");
+  {
+    ServerProcess server(dir, 1, 2, /*lease_ms=*/3000);
+    const std::string id = submit(server, slow_scenario(20));
+    ASSERT_TRUE(wait_until([&] { return has_progress(server, id); }, seconds(60), milliseconds(100))) << server.log();
+    const auto pids = server.worker_pids();
+    ASSERT_FALSE(pids.empty()) << "no worker process found";
+    for (pid_t pid : pids) ::kill(pid, SIGKILL);
+    // The lease expires, the job is requeued, the restarted worker runs it to the end.
+    ASSERT_TRUE(wait_for_state(server, id, v1::SUCCEEDED, seconds(180))) << server.log();
+    const v1::Job job = get_job(server, id);
+    EXPECT_EQ(job.attempts(), 2);
+    EXPECT_NE(server.log().find("lease expired"), std::string::npos);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(FaultsE2E, KilledServerKeepsEveryJobAndResult) {
+  const fs::path dir = make_temp_dir("killserver");
+  std::string done_id, running_id, queued_id, done_sha;
+  {
+    ServerProcess server(dir, 1, 1, /*lease_ms=*/3000);
+    done_id = submit(server, {{"scene", "lumped"}, {"beats", 3}, {"periodicity_tolerance", 0}});
+    ASSERT_TRUE(wait_for_state(server, done_id, v1::SUCCEEDED, seconds(60))) << server.log();
+    running_id = submit(server, slow_scenario(15));
+    queued_id = submit(server, {{"scene", "lumped"}, {"beats", 2}, {"periodicity_tolerance", 0}});
+    ASSERT_TRUE(wait_until([&] { return has_progress(server, running_id); }, seconds(60), milliseconds(100)));
+    EXPECT_EQ(get_job(server, queued_id).state(), v1::QUEUED);
+    v1::GetResultRequest request;
+    request.set_id(done_id);
+    v1::Result result;
+    auto context = deadline_context();
+    ASSERT_TRUE(server.stub().GetResult(context.get(), request, &result).ok());
+    for (const auto& a : result.artifacts())
+      if (a.name() == "result.h5") done_sha = a.sha256();
+    ASSERT_FALSE(done_sha.empty());
+    server.stop(SIGKILL);  // a crash: no shutdown code runs
+    // Restart on the same database and data directory (new ports).
+    server.start(1, 1, 3000);
+    EXPECT_EQ(get_job(server, done_id).state(), v1::SUCCEEDED);
+    const auto running_state = get_job(server, running_id).state();
+    EXPECT_TRUE(running_state == v1::RUNNING || running_state == v1::QUEUED) << v1::JobState_Name(running_state);
+    // The finished result is still downloadable, byte for byte.
+    v1::DownloadArtifactRequest dl;
+    dl.set_id(done_id);
+    dl.set_name("result.h5");
+    auto ctx = deadline_context();
+    auto reader = server.stub().DownloadArtifact(ctx.get(), dl);
+    v1::ArtifactChunk chunk;
+    std::string sha;
+    int64_t bytes = 0;
+    while (reader->Read(&chunk)) {
+      sha = chunk.sha256();
+      bytes += static_cast<int64_t>(chunk.data().size());
+    }
+    ASSERT_TRUE(reader->Finish().ok());
+    EXPECT_EQ(sha, done_sha);
+    EXPECT_GT(bytes, 0);
+    // The interrupted job and the queued one both finish after the restart.
+    EXPECT_TRUE(wait_for_state(server, running_id, v1::SUCCEEDED, seconds(180))) << server.log();
+    EXPECT_TRUE(wait_for_state(server, queued_id, v1::SUCCEEDED, seconds(60))) << server.log();
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace systole::e2e
