@@ -2,7 +2,8 @@
 // validated scenario, every rank runs the scene, rank 0 writes and uploads the results and
 // completes the job; then it leases the next one. Heartbeats (with progress) go out every
 // second from a helper thread on rank 0; a cancel request stops the run within ~1 s plus one
-// scene check; SIGTERM gives the current job back (ReleaseJob) and exits.
+// scene check; SIGTERM, SIGINT or SIGUSR1 (forwarded by mpirun) gives the current job back
+// (ReleaseJob) and exits.
 #include <mpi.h>
 #include <signal.h>
 #include <unistd.h>
@@ -330,6 +331,7 @@ int main(int argc, char** argv) {
   action.sa_handler = on_signal;
   sigaction(SIGTERM, &action, nullptr);
   sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGUSR1, &action, nullptr);  // what systole-server sends its local workers to drain
 
   if (worker_id.empty()) {
     char host[256] = "host";

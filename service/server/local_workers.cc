@@ -47,6 +47,9 @@ pid_t LocalWorkers::spawn(int slot) {
     }
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+    // If mpirun itself gets SIGTERM (e.g. the server died), it SIGTERMs the ranks and SIGKILLs
+    // them after this many seconds: time for a worker to give its job back.
+    ::setenv("OMPI_MCA_odls_base_sigkill_timeout", "5", 1);
     const std::string ranks = std::to_string(options_.ranks);
     std::vector<std::string> args{"mpirun", "-np", ranks, "--oversubscribe", "--bind-to", "none",
                                   options_.worker_binary, "--server", options_.server_address,
@@ -97,12 +100,21 @@ LocalWorkers::~LocalWorkers() {
   }
   cv_.notify_all();
   supervisor_.join();
+  // SIGUSR1 is forwarded by mpirun to every rank (Open MPI's default signal forwarding): the
+  // worker gives its job back (ReleaseJob) and exits, and then mpirun exits. SIGTERM after
+  // 8 s, SIGKILL after 10 s.
   for (pid_t pid : pids_)
-    if (pid > 0) ::kill(pid, SIGTERM);  // mpirun forwards SIGTERM to its ranks
+    if (pid > 0) ::kill(pid, SIGUSR1);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  bool terminated = false;
   for (pid_t pid : pids_) {
     if (pid <= 0) continue;
     while (::waitpid(pid, nullptr, WNOHANG) == 0) {
+      if (!terminated && std::chrono::steady_clock::now() > deadline - std::chrono::seconds(2)) {
+        for (pid_t p : pids_)
+          if (p > 0) ::kill(p, SIGTERM);
+        terminated = true;
+      }
       if (std::chrono::steady_clock::now() > deadline) {
         ::kill(-pid, SIGKILL);
         ::kill(pid, SIGKILL);

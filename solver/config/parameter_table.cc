@@ -203,11 +203,11 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.aortic_resistance_mmhg_s_per_ml, "mmHg*s/ml", 0.005,
                                     0, 10, "Open aortic valve resistance (in series with Zc)."));
   t.push_back(SYSTOLE_REAL(lumped.mitral_inertance_mmhg_s2_per_ml, "mmHg*s^2/ml", 0, 0, 1,
-                           "Mitral inertance; > 0 makes the valve flow a state (0: none). Must be 0 "
-                           "when the LV or LA is an external (3-D) chamber."));
+                           "Mitral inertance; > 0 makes the valve flow a state (0: none). "
+                           "Must be 0 when the LV or LA is an external (3-D) chamber."));
   t.push_back(SYSTOLE_REAL(lumped.aortic_inertance_mmhg_s2_per_ml, "mmHg*s^2/ml", 0, 0, 1,
-                           "Aortic inertance; > 0 makes the valve flow a state (0: none). Must be 0 "
-                           "when the LV is an external (3-D) chamber."));
+                           "Aortic inertance; > 0 makes the valve flow a state (0: none). "
+                           "Must be 0 when the LV is an external (3-D) chamber."));
   t.push_back(SYSTOLE_REAL(lumped.valve_backflow_conductance_fraction, "", 1e-5, 0, 0.1,
                            "Closed-valve conductance as a fraction of the open one (leak); must be "
                            "> 0 with external chambers."));
@@ -216,8 +216,9 @@ std::vector<Param> build_table() {
                            "Three-element Windkessel characteristic impedance Zc (aortic root "
                            "to C)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.systemic_resistance_mmhg_s_per_ml, "mmHg*s/ml", 1.05, 0,
-                                    20, "Windkessel peripheral resistance R, into the pulmonary venous "
-                                    "compliance."));
+                                    20,
+                                    "Windkessel peripheral resistance R, into the pulmonary "
+                                    "venous compliance."));
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.systemic_compliance_ml_per_mmhg, "ml/mmHg", 1.8, 0, 20,
                                     "Windkessel total arterial compliance C."));
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.pulmonary_venous_compliance_ml_per_mmhg, "ml/mmHg", 10,
@@ -225,11 +226,12 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.pulmonary_venous_resistance_mmhg_s_per_ml, "mmHg*s/ml",
                                     0.02, 0, 10, "Pulmonary venous resistance into the LA."));
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.stressed_blood_volume_ml, "ml", 372, 0, 5000,
-                                    "Stressed blood volume: sum of (V - V0) of LV and LA plus C P of both "
-                                    "compliances; sets the filling (EDV 125 ml)."));
+                                    "Stressed blood volume: sum of (V - V0) of LV and LA plus "
+                                    "C P of both compliances; sets the filling (EDV 125 ml)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.time_step_ms, "ms", 0.5, 0, 10,
-                                    "0-D RK4 step (largest; steps also end on activation breakpoints). "
-                                    "0.5 ms: metrics within 2e-3 mmHg of a converged run."));
+                                    "0-D RK4 step (largest; steps also end on activation "
+                                    "breakpoints). 0.5 ms: metrics within 2e-3 mmHg of a "
+                                    "converged run."));
   // --- coupling (MODEL.md §7) -------------------------------------------------------------
   t.push_back(SYSTOLE_CHOICE(coupling.mode, "loose",
                              (std::vector<std::string_view>{"loose", "strong"}),

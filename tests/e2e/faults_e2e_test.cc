@@ -1,5 +1,9 @@
 // Fault tolerance end to end: kill -9 a worker mid-job, kill -9 the server mid-run, cancel a
 // running job. Each test has its own server, SQLite file and workers.
+#include <future>
+
+#include <grpcpp/generic/generic_stub.h>
+
 #include "tests/e2e/harness.h"
 
 namespace systole::e2e {
@@ -104,6 +108,49 @@ TEST(FaultsE2E, KilledServerKeepsEveryJobAndResult) {
     // The interrupted job and the queued one both finish after the restart.
     EXPECT_TRUE(wait_for_state(server, running_id, v1::SUCCEEDED, seconds(180))) << server.log();
     EXPECT_TRUE(wait_for_state(server, queued_id, v1::SUCCEEDED, seconds(60))) << server.log();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(FaultsE2E, GracefulStopReleasesTheRunningJob) {
+  const fs::path dir = make_temp_dir("sigterm");
+  {
+    ServerProcess server(dir, 1, 2, /*lease_ms=*/60000);
+    const std::string id = submit(server, slow_scenario(1000));
+    ASSERT_TRUE(wait_until([&] { return has_progress(server, id); }, seconds(60), milliseconds(100))) << server.log();
+    const auto start = std::chrono::steady_clock::now();
+    server.stop(SIGTERM);  // the server SIGTERMs its workers, which give the job back
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+    server.start(/*local_workers=*/0, 1, 60000);
+    const v1::Job job = get_job(server, id);
+    // Released, not waiting for a 60 s lease to expire; a release is not a failed attempt.
+    EXPECT_EQ(job.state(), v1::QUEUED) << server.log();
+    EXPECT_EQ(job.attempts(), 0);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(FaultsE2E, HealthServiceReportsServing) {
+  const fs::path dir = make_temp_dir("health");
+  {
+    ServerProcess server(dir, 0, 1);
+    grpc::GenericStub generic(server.channel());
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + seconds(10));
+    grpc::ByteBuffer request;  // HealthCheckRequest{service: ""} encodes to zero bytes
+    grpc::Slice empty("");
+    request = grpc::ByteBuffer(&empty, 1);
+    grpc::ByteBuffer response;
+    std::promise<grpc::Status> done;
+    generic.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                      [&](grpc::Status status) { done.set_value(status); });
+    const grpc::Status status = done.get_future().get();
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    std::vector<grpc::Slice> slices;
+    ASSERT_TRUE(response.Dump(&slices).ok());
+    std::string bytes;
+    for (const auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+    EXPECT_EQ(bytes, std::string("\x08\x01"));  // HealthCheckResponse{status: SERVING}
   }
   fs::remove_all(dir);
 }
