@@ -8,23 +8,27 @@
 namespace systole::diagnostics {
 namespace {
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("diagnostics: " + what);
+// Messages are built only on failure: these checks run over every sample of every beat.
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("diagnostics: " + what);
+}
+
+void require(bool ok, const char* what) {
+  if (!ok) fail(what);
 }
 
 void check_time(std::span<const double> time_s) {
-  require(time_s.size() >= 2, "a beat needs at least 2 samples, got " +
-                                  std::to_string(time_s.size()));
+  if (time_s.size() < 2)
+    fail("a beat needs at least 2 samples, got " + std::to_string(time_s.size()));
   for (size_t i = 1; i < time_s.size(); ++i)
-    require(time_s[i] > time_s[i - 1], "time_s must be strictly increasing (sample " +
-                                           std::to_string(i) + ")");
+    if (!(time_s[i] > time_s[i - 1]))
+      fail("time_s must be strictly increasing (sample " + std::to_string(i) + ")");
 }
 
-void check_same_size(std::span<const double> time_s, std::span<const double> v,
-                     const char* name) {
-  require(v.size() == time_s.size(), std::string(name) + " has " + std::to_string(v.size()) +
-                                         " samples, time_s has " +
-                                         std::to_string(time_s.size()));
+void check_same_size(std::span<const double> time_s, std::span<const double> v, const char* name) {
+  if (v.size() != time_s.size())
+    fail(std::string(name) + " has " + std::to_string(v.size()) + " samples, time_s has " +
+         std::to_string(time_s.size()));
 }
 
 double peak_abs(std::span<const double> v) {
@@ -68,14 +72,13 @@ double value_at(std::span<const double> time_s, std::span<const double> values, 
   return values[i - 1] + w * (values[i] - values[i - 1]);
 }
 
-std::optional<double> first_crossing(std::span<const double> time_s,
-                                     std::span<const double> values, double level,
-                                     Crossing direction) {
+std::optional<double> first_crossing(std::span<const double> time_s, std::span<const double> values,
+                                     double level, Crossing direction) {
   check_same_size(time_s, values, "values");
   for (size_t i = 1; i < values.size(); ++i) {
     const double a = values[i - 1], b = values[i];
-    const bool hit = direction == Crossing::kUpward ? (a <= level && b > level)
-                                                    : (a > level && b <= level);
+    const bool hit =
+        direction == Crossing::kUpward ? (a <= level && b > level) : (a > level && b <= level);
     if (!hit) continue;
     const double s = (level - a) / (b - a);  // b != a because the inequalities are strict
     return time_s[i - 1] + s * (time_s[i] - time_s[i - 1]);
@@ -141,8 +144,7 @@ BeatMetrics compute_beat_metrics(const BeatSamples& b) {
   m.aortic_pressure_max_mmhg = *std::max_element(pa.begin(), pa.end());
   m.aortic_pressure_min_mmhg = *std::min_element(pa.begin(), pa.end());
   m.aortic_pressure_mean_mmhg = time_average(b.time_s, pa);
-  m.mitral_peak_flow_ml_s =
-      *std::max_element(b.mitral_flow_ml_s.begin(), b.mitral_flow_ml_s.end());
+  m.mitral_peak_flow_ml_s = *std::max_element(b.mitral_flow_ml_s.begin(), b.mitral_flow_ml_s.end());
   m.aortic_peak_flow_ml_s = *std::max_element(b.aortic_flow_ml_s.begin(), b.aortic_flow_ml_s.end());
 
   // E and A waves: local maxima of the mitral flow after the mitral valve opens.

@@ -46,11 +46,11 @@ struct BeatMetrics {
   double heart_rate_bpm = 0;
   double edv_ml = 0;
   double esv_ml = 0;
-  double stroke_volume_ml = 0;               // EDV - ESV
-  double ejection_fraction_percent = 0;      // 100 * SV / EDV
-  double cardiac_output_l_min = 0;           // SV * HR
-  double aortic_forward_volume_ml = 0;       // integral of aortic flow over the beat
-  double mitral_inflow_volume_ml = 0;        // integral of mitral flow over the beat
+  double stroke_volume_ml = 0;                // EDV - ESV
+  double ejection_fraction_percent = 0;       // 100 * SV / EDV
+  double cardiac_output_l_min = 0;            // SV * HR
+  double aortic_forward_volume_ml = 0;        // integral of aortic flow over the beat
+  double mitral_inflow_volume_ml = 0;         // integral of mitral flow over the beat
   double lv_end_diastolic_pressure_mmhg = 0;  // LV pressure at end-diastole
   double lv_end_systolic_pressure_mmhg = 0;   // LV pressure at end-systole
   double lv_peak_pressure_mmhg = 0;
@@ -92,9 +92,8 @@ double value_at(std::span<const double> time_s, std::span<const double> values, 
 enum class Crossing { kUpward, kDownward };
 // Time of the first crossing of `level` in the given direction (linear interpolation), or
 // empty. Upward: values[i] <= level < values[i+1]; downward: values[i] > level >= values[i+1].
-std::optional<double> first_crossing(std::span<const double> time_s,
-                                     std::span<const double> values, double level,
-                                     Crossing direction);
+std::optional<double> first_crossing(std::span<const double> time_s, std::span<const double> values,
+                                     double level, Crossing direction);
 
 // Opening/closing phases of one valve from its flow curve (see ValveEvents).
 ValveEvents valve_events(std::span<const double> time_s, std::span<const double> flow_ml_s,

@@ -49,8 +49,7 @@ double solve_decreasing(F&& f, double x0) {
       }
     }
     if (std::abs(next - x) <= 1e-12 * std::max(1.0, std::abs(x))) return next;
-    if (std::isfinite(lo) && std::isfinite(hi) &&
-        hi - lo <= 1e-12 * std::max(1.0, std::abs(x)))
+    if (std::isfinite(lo) && std::isfinite(hi) && hi - lo <= 1e-12 * std::max(1.0, std::abs(x)))
       return 0.5 * (lo + hi);
     x = next;
   }
@@ -100,6 +99,8 @@ Circulation::Circulation(const config::Scenario& s, const ExternalVolumes& exter
   // Initial state (README "Initial state"): the systemic compliance at 80 mmHg, the LV, the LA
   // and the pulmonary veins at one common pressure p, all summing to the stressed volume.
   const double e_lv = lv_elastance_.at(0.0), e_la = la_elastance_.at(0.0);
+  lv_elastance_now_ = e_lv;
+  la_elastance_now_ = e_la;
   double budget = p_.stressed_blood_volume_ml;
   if (lv_external_) budget -= *external.lv_ml - p_.lv.v0_ml;
   if (la_external_) budget -= *external.la_ml - p_.la.v0_ml;
@@ -130,14 +131,14 @@ double Circulation::mitral_floor(double dp) const {
   return dp < 0 ? mitral_.closed_conductance() * dp : -kInf;
 }
 
-void Circulation::solve_external_pressures(const State& y, double p_sa, double p_pv,
-                                           const Rates& rates, double& p_lv,
-                                           double& p_la) const {
+void Circulation::solve_external_pressures(double p_sa, double p_pv, const Rates& rates,
+                                           double& p_lv, double& p_la) const {
   // LV balance: q_mitral(p_la - p_lv) - q_aortic(p_lv - p_sa) = dV_lv/dt, decreasing in p_lv.
   auto solve_lv = [&](double pla) {
     return solve_decreasing(
         [&](double plv) {
-          const double f = mitral_.flow_ml_s(pla - plv) - aortic_.flow_ml_s(plv - p_sa) - rates.lv_ml_s;
+          const double f =
+              mitral_.flow_ml_s(pla - plv) - aortic_.flow_ml_s(plv - p_sa) - rates.lv_ml_s;
           const double df =
               -(mitral_.conductance_slope(pla - plv) + aortic_.conductance_slope(plv - p_sa));
           return std::pair{f, df};
@@ -170,7 +171,6 @@ void Circulation::solve_external_pressures(const State& y, double p_sa, double p
     p_lv = solve_lv(p_la);
     lv_pressure_guess_ = p_lv;
   }
-  (void)y;
 }
 
 Circulation::State Circulation::derivatives(const State& y, double e_lv, double e_la,
@@ -179,7 +179,7 @@ Circulation::State Circulation::derivatives(const State& y, double e_lv, double 
   const double p_pv = y[kPulmonary] / p_.pulmonary_venous_compliance_ml_per_mmhg;
   double p_lv = lv_external_ ? 0 : e_lv * (y[kLv] - p_.lv.v0_ml);
   double p_la = la_external_ ? 0 : e_la * (y[kLa] - p_.la.v0_ml);
-  if (lv_external_ || la_external_) solve_external_pressures(y, p_sa, p_pv, rates, p_lv, p_la);
+  if (lv_external_ || la_external_) solve_external_pressures(p_sa, p_pv, rates, p_lv, p_la);
 
   const double q_pv = (p_pv - p_la) / p_.pulmonary_venous_resistance_mmhg_s_per_ml;
   const double q_s = (p_sa - p_pv) / p_.systemic_resistance_mmhg_s_per_ml;
@@ -231,9 +231,9 @@ Circulation::State Circulation::derivatives(const State& y, double e_lv, double 
     out->lv_outflow_conductance_ml_s_per_mmhg =
         lv_external_ ? mitral_.conductance_slope(dp_m) + aortic_.conductance_slope(dp_a) : 0;
     out->la_outflow_conductance_ml_s_per_mmhg =
-        la_external_ ? 1.0 / p_.pulmonary_venous_resistance_mmhg_s_per_ml +
-                           mitral_.conductance_slope(dp_m)
-                     : 0;
+        la_external_
+            ? 1.0 / p_.pulmonary_venous_resistance_mmhg_s_per_ml + mitral_.conductance_slope(dp_m)
+            : 0;
   }
   return d;
 }
@@ -253,7 +253,7 @@ void Circulation::advance(double dt_s, const ExternalVolumes& at_end) {
   }
   // Classical RK4; the elastances are evaluated once per distinct stage time.
   const double t = time_s_, h = dt_s;
-  const double e_lv0 = lv_elastance_.at(t), e_la0 = la_elastance_.at(t);
+  const double e_lv0 = lv_elastance_now_, e_la0 = la_elastance_now_;
   const double e_lvh = lv_elastance_.at(t + 0.5 * h), e_lah = la_elastance_.at(t + 0.5 * h);
   const double e_lv1 = lv_elastance_.at(t + h), e_la1 = la_elastance_.at(t + h);
   auto axpy = [](const State& y, double a, const State& k) {
@@ -266,7 +266,8 @@ void Circulation::advance(double dt_s, const ExternalVolumes& at_end) {
   const State k3 = derivatives(axpy(y_, 0.5 * h, k2), e_lvh, e_lah, rates, nullptr);
   const State k4 = derivatives(axpy(y_, h, k3), e_lv1, e_la1, rates, nullptr);
   State y;
-  for (int i = 0; i < kSize; ++i) y[i] = y_[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+  for (int i = 0; i < kSize; ++i)
+    y[i] = y_[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
   if (lv_external_) y[kLv] = *at_end.lv_ml;
   if (la_external_) y[kLa] = *at_end.la_ml;
   check(y, t + h, h);
@@ -275,7 +276,8 @@ void Circulation::advance(double dt_s, const ExternalVolumes& at_end) {
     Readout r;
     derivatives(y, e_lv1, e_la1, rates, &r);
     if (mitral_inertial_)
-      y[kMitralFlow] = std::max(y[kMitralFlow], mitral_floor(r.la_pressure_mmhg - r.lv_pressure_mmhg));
+      y[kMitralFlow] =
+          std::max(y[kMitralFlow], mitral_floor(r.la_pressure_mmhg - r.lv_pressure_mmhg));
     if (aortic_inertial_) {
       const double dp = r.lv_pressure_mmhg - r.systemic_arterial_pressure_mmhg;
       if (dp < 0) y[kAorticFlow] = std::max(y[kAorticFlow], aortic_.closed_conductance() * dp);
@@ -283,12 +285,14 @@ void Circulation::advance(double dt_s, const ExternalVolumes& at_end) {
   }
   y_ = y;
   time_s_ = t + h;
+  lv_elastance_now_ = e_lv1;
+  la_elastance_now_ = e_la1;
   last_rates_ = rates;
 }
 
 Readout Circulation::readout() const {
   Readout r;
-  derivatives(y_, lv_elastance_.at(time_s_), la_elastance_.at(time_s_), last_rates_, &r);
+  derivatives(y_, lv_elastance_now_, la_elastance_now_, last_rates_, &r);
   r.time_s = time_s_;
   return r;
 }

@@ -34,10 +34,10 @@ struct Readout {
   double aortic_pressure_mmhg = 0;             // aortic root, upstream of Zc
   double systemic_arterial_pressure_mmhg = 0;  // across the compliance C (downstream of Zc)
   double pulmonary_venous_pressure_mmhg = 0;
-  double mitral_flow_ml_s = 0;  // + : LA -> LV
-  double aortic_flow_ml_s = 0;  // + : LV -> aorta
-  double systemic_flow_ml_s = 0;           // through R_s, into C_pv
-  double pulmonary_venous_flow_ml_s = 0;   // through R_pv, into the LA
+  double mitral_flow_ml_s = 0;            // + : LA -> LV
+  double aortic_flow_ml_s = 0;            // + : LV -> aorta
+  double systemic_flow_ml_s = 0;          // through R_s, into C_pv
+  double pulmonary_venous_flow_ml_s = 0;  // through R_pv, into the LA
   // V_lv + V_la + stressed volumes of C and C_pv: constant in time for elastance chambers
   // (the flows only move blood around the loop); external chambers add what they impose.
   double total_volume_ml = 0;
@@ -88,8 +88,8 @@ class Circulation {
   State derivatives(const State& y, double e_lv, double e_la, const Rates& rates,
                     Readout* out) const;
   // Pressures of the external chambers for which the valve flows match the imposed rates.
-  void solve_external_pressures(const State& y, double p_sa, double p_pv, const Rates& rates,
-                                double& p_lv, double& p_la) const;
+  void solve_external_pressures(double p_sa, double p_pv, const Rates& rates, double& p_lv,
+                                double& p_la) const;
   double mitral_floor(double dp) const;
   void check(const State& y, double t_s, double dt_s) const;
 
@@ -100,6 +100,7 @@ class Circulation {
   bool lv_external_, la_external_;
   State y_{};
   double time_s_ = 0;
+  double lv_elastance_now_ = 0, la_elastance_now_ = 0;  // E(time_s_), reused by the next step
   Rates last_rates_;
   // Warm starts of the external pressure solves (mutable: a cache, not state).
   mutable double lv_pressure_guess_ = 10, la_pressure_guess_ = 10;

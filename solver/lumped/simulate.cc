@@ -118,10 +118,14 @@ RunResult simulate(const config::Scenario& s,
       curves.push(t0 + grid[i], circulation.readout());
     }
     // --- metrics of this beat --------------------------------------------------------------
-    diagnostics::BeatSamples samples{curves.time_s,          curves.lv_volume_ml,
-                                     curves.lv_pressure_mmhg, curves.aortic_pressure_mmhg,
-                                     curves.mitral_flow_ml_s, curves.aortic_flow_ml_s,
-                                     t0,                     period};
+    diagnostics::BeatSamples samples{curves.time_s,
+                                     curves.lv_volume_ml,
+                                     curves.lv_pressure_mmhg,
+                                     curves.aortic_pressure_mmhg,
+                                     curves.mitral_flow_ml_s,
+                                     curves.aortic_flow_ml_s,
+                                     t0,
+                                     period};
     last = diagnostics::to_map(diagnostics::compute_beat_metrics(samples));
     const double edv = last.at("edv_ml");
     relative_change = std::abs(edv - previous_edv) / previous_edv;
@@ -142,8 +146,8 @@ RunResult simulate(const config::Scenario& s,
       report.beats_total = s.beats;
       report.fraction = static_cast<double>(beat) / s.beats;
       std::ostringstream m;
-      m << "beat " << beat << ": EF " << last.at("ejection_fraction_percent") << " %, EDV "
-        << edv << " ml, |dEDV|/EDV " << relative_change;
+      m << "beat " << beat << ": EF " << last.at("ejection_fraction_percent") << " %, EDV " << edv
+        << " ml, |dEDV|/EDV " << relative_change;
       report.message = m.str();
       report.latest_beat_metrics = last;
       on_beat(report);

@@ -9,8 +9,7 @@ SmoothDiode::SmoothDiode(double open_resistance, double closed_resistance)
     : g_open_(1.0 / open_resistance),
       g_closed_(std::isinf(closed_resistance) ? 0.0 : 1.0 / closed_resistance) {
   if (!(open_resistance > 0) || !(closed_resistance >= open_resistance))
-    throw std::invalid_argument(
-        "SmoothDiode: need 0 < open resistance <= closed resistance");
+    throw std::invalid_argument("SmoothDiode: need 0 < open resistance <= closed resistance");
 }
 
 double SmoothDiode::conductance_slope(double dp) const {

@@ -2,7 +2,9 @@
 // consistency that keeps proto/systole/v1/scenario.proto and parameter_table.cc in step.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include <google/protobuf/descriptor.h>
 
@@ -199,5 +201,20 @@ TEST(Bridge, ProtoJsonPathRejectsUnknownFieldsAndAcceptsCamelCase) {
   EXPECT_THROW(bridge::load_scenario_file("/nonexistent/scenario.json", {}), InputError);
 }
 
+}  // namespace
+}  // namespace systole::config
+
+namespace systole::config {
+namespace {
+// docs/parameters.md is generated from the table; this fails when someone changes the table
+// and forgets `build/bin/systole-solve --list-parameters > docs/parameters.md`.
+TEST(Config, ParameterReferenceInDocsIsCurrent) {
+  std::ifstream in(std::string(SYSTOLE_SOURCE_DIR) + "/docs/parameters.md");
+  ASSERT_TRUE(in) << "docs/parameters.md is missing";
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), parameters_markdown())
+      << "regenerate: build/bin/systole-solve --list-parameters > docs/parameters.md";
+}
 }  // namespace
 }  // namespace systole::config

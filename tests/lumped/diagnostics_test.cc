@@ -1,0 +1,155 @@
+// Beat metrics on synthetic curves whose answers are known in closed form.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <vector>
+
+#include "solver/diagnostics/beat_metrics.h"
+
+namespace systole::diagnostics {
+namespace {
+
+// A hand-made beat of period 0.8 s sampled every 1 ms, built from straight pieces so every
+// expected value is exact:
+//  - mitral flow +100 ml/s until t = 0.02 s, -1 (leak) until 0.34 s, then two bumps
+//    (E at 0.40 s, height 500; A at 0.72 s, height 250), back to +100 at the end;
+//  - aortic flow -1 until 0.06 s, a triangle up to 400 ml/s at 0.15 s, back down crossing 0
+//    at 0.28 s, -1 afterwards;
+//  - LV volume falls linearly from 120 ml (t = 0.06) to 50 ml (t = 0.28), rises afterwards;
+//  - LV pressure 10 + 100 sin(pi (t - 0.02) / 0.30) during systole, aortic pressure 80..120.
+struct SyntheticBeat {
+  std::vector<double> t, v, p, pa, qm, qa;
+  static double tri(double x, double x0, double half_width, double height) {
+    const double d = std::abs(x - x0) / half_width;
+    return d < 1 ? height * (1 - d) : 0;
+  }
+  SyntheticBeat() {
+    for (int i = 0; i <= 800; ++i) {
+      const double s = i * 1e-3;
+      t.push_back(s);
+      double volume;
+      if (s < 0.06)
+        volume = 120;
+      else if (s < 0.28)
+        volume = 120 - 70 * (s - 0.06) / 0.22;
+      else if (s < 0.34)
+        volume = 50;
+      else
+        volume = 50 + 70 * (s - 0.34) / 0.46;
+      v.push_back(volume);
+      p.push_back(s > 0.02 && s < 0.32 ? 10 + 100 * std::sin(std::numbers::pi * (s - 0.02) / 0.30)
+                                       : 10);
+      pa.push_back(80 + 40 * std::exp(-std::pow((s - 0.18) / 0.08, 2)));
+      double m;
+      if (s < 0.02)
+        m = 100 - 5000 * s;  // 100 at 0, 0 at 0.02
+      else if (s < 0.34)
+        m = -1;
+      else
+        m = tri(s, 0.40, 0.06, 500) + tri(s, 0.72, 0.06, 250) - 1 * (s < 0.34);
+      if (s >= 0.34 && m <= 0) m = 2;  // open, low diastasis flow
+      qm.push_back(m);
+      double a = -1;
+      if (s >= 0.06 && s <= 0.15)
+        a = -1 + 401 * (s - 0.06) / 0.09;
+      else if (s > 0.15 && s < 0.30)
+        a = 400 - 400 * (s - 0.15) / 0.13;
+      if (s >= 0.30) a = -1;
+      qa.push_back(a);
+    }
+  }
+  BeatSamples samples() const { return {t, v, p, pa, qm, qa, 0.0, 0.8}; }
+};
+
+TEST(BeatMetrics, BuildingBlocks) {
+  EXPECT_DOUBLE_EQ(stroke_volume_ml(125, 52), 73);
+  EXPECT_NEAR(ejection_fraction_percent(125, 52), 58.4, 1e-12);
+  EXPECT_EQ(ejection_fraction_percent(0, 0), 0);
+  EXPECT_NEAR(cardiac_output_l_min(73, 70), 5.11, 1e-12);  // 73 ml x 70 /min = 5.11 l/min
+  const std::vector<double> t{0, 1, 2, 4}, y{1, 3, 3, -1};
+  EXPECT_DOUBLE_EQ(integrate(t, y), 2 + 3 + 2);
+  EXPECT_DOUBLE_EQ(time_average(t, y), 7.0 / 4.0);
+  EXPECT_DOUBLE_EQ(*first_crossing(t, y, 2.0, Crossing::kUpward), 0.5);
+  EXPECT_DOUBLE_EQ(*first_crossing(t, y, 0.0, Crossing::kDownward), 3.5);
+  EXPECT_FALSE(first_crossing(t, y, 5.0, Crossing::kUpward).has_value());
+  EXPECT_DOUBLE_EQ(value_at(t, y, 3.0), 1.0);
+  EXPECT_DOUBLE_EQ(value_at(t, y, -1.0), 1.0);
+}
+
+TEST(BeatMetrics, SyntheticBeatGivesTheConstructedAnswers) {
+  const SyntheticBeat b;
+  const BeatMetrics m = compute_beat_metrics(b.samples());
+  EXPECT_NEAR(m.heart_rate_bpm, 75, 1e-12);
+  // Mitral closure where 100 - 5000 t crosses 0 (t = 0.02 exactly) -> phase 0.025.
+  ASSERT_TRUE(m.mitral_valve.close_phase);
+  EXPECT_NEAR(*m.mitral_valve.close_phase, 0.02 / 0.8, 1e-3 / 0.8);
+  ASSERT_TRUE(m.mitral_valve.open_phase);
+  EXPECT_NEAR(*m.mitral_valve.open_phase, 0.34 / 0.8, 1e-3 / 0.8);
+  // Aortic opening where -1 + 401 (t - 0.06)/0.09 = 0, closing where 400 - 400 (t-0.15)/0.13
+  // crosses 0 (t = 0.28).
+  ASSERT_TRUE(m.aortic_valve.open_phase);
+  EXPECT_NEAR(*m.aortic_valve.open_phase, (0.06 + 0.09 / 401) / 0.8, 1e-3 / 0.8);
+  ASSERT_TRUE(m.aortic_valve.close_phase);
+  EXPECT_NEAR(*m.aortic_valve.close_phase, 0.28 / 0.8, 1e-3 / 0.8);
+  // End-diastole at mitral closure (V = 120), end-systole at aortic closure (V = 50).
+  EXPECT_NEAR(m.edv_ml, 120, 1e-9);
+  EXPECT_NEAR(m.esv_ml, 50, 1e-6);
+  EXPECT_NEAR(m.ejection_fraction_percent, 100.0 * 70 / 120, 1e-5);
+  EXPECT_NEAR(m.cardiac_output_l_min, 70 * 75 / 1000.0, 1e-6);
+  EXPECT_NEAR(m.lv_end_diastolic_pressure_mmhg, 10, 1e-9);
+  EXPECT_NEAR(m.lv_peak_pressure_mmhg, 110, 1e-6);
+  EXPECT_NEAR(m.lv_peak_pressure_phase, 0.17 / 0.8, 1e-12);
+  EXPECT_NEAR(m.aortic_pressure_max_mmhg, 120, 1e-9);
+  // The Gaussian bump over [0, 0.8] integrates to 40 * 0.08 sqrt(pi) (1 - erfc(2.25) / 2)
+  // (the right tail beyond 0.8 s is below 1e-20).
+  EXPECT_NEAR(
+      m.aortic_pressure_mean_mmhg,
+      80 + 40 * 0.08 * std::sqrt(std::numbers::pi) * (1 - 0.5 * std::erfc(0.18 / 0.08)) / 0.8,
+      1e-5);
+  ASSERT_TRUE(m.mitral_e_peak_phase && m.mitral_a_peak_phase);
+  EXPECT_NEAR(*m.mitral_e_peak_phase, 0.40 / 0.8, 1e-9);
+  EXPECT_NEAR(*m.mitral_a_peak_phase, 0.72 / 0.8, 1e-9);
+  EXPECT_NEAR(*m.mitral_e_peak_flow_ml_s, 500, 1e-6);
+  EXPECT_NEAR(*m.mitral_a_peak_flow_ml_s, 250, 1e-6);
+  const auto map = to_map(m);
+  EXPECT_NEAR(map.at("mitral_e_to_a_ratio"), 2.0, 1e-9);
+  EXPECT_EQ(map.count("aortic_valve_close_phase"), 1u);
+}
+
+TEST(BeatMetrics, MissingEventsAreLeftOutNotNaN) {
+  std::vector<double> t{0, 0.5, 1}, v{100, 100, 100}, p{5, 5, 5}, q{0, 0, 0};
+  const BeatMetrics m = compute_beat_metrics({t, v, p, p, q, q, 0, 1});
+  EXPECT_FALSE(m.aortic_valve.open_phase || m.aortic_valve.close_phase);
+  const auto map = to_map(m);
+  EXPECT_EQ(map.count("aortic_valve_close_phase"), 0u);
+  EXPECT_EQ(map.count("mitral_e_to_a_ratio"), 0u);
+  for (const auto& [key, value] : map) EXPECT_TRUE(std::isfinite(value)) << key;
+  EXPECT_EQ(m.edv_ml, 100);  // fallback: largest volume
+}
+
+TEST(BeatMetrics, RejectsBadInput) {
+  std::vector<double> t{0, 1}, t_bad{0, 0}, v{1, 2}, short_v{1};
+  EXPECT_THROW(compute_beat_metrics({t, short_v, v, v, v, v, 0, 1}), std::invalid_argument);
+  EXPECT_THROW(compute_beat_metrics({t_bad, v, v, v, v, v, 0, 1}), std::invalid_argument);
+  EXPECT_THROW(compute_beat_metrics({t, v, v, v, v, v, 0, 0}), std::invalid_argument);
+}
+
+TEST(BeatMetrics, ThresholdIgnoresSmallNoise) {
+  // A flow that wiggles around zero before opening: sign changes would report the wiggle,
+  // a 5 % threshold reports the real opening at t = 0.5.
+  std::vector<double> t, q, v, p;
+  for (int i = 0; i <= 100; ++i) {
+    const double s = i * 0.01;
+    t.push_back(s);
+    q.push_back(s < 0.5 ? 0.5 * std::sin(40 * s) : 100 * (s - 0.5) / 0.1);
+    v.push_back(100);
+    p.push_back(10);
+  }
+  EXPECT_LT(*valve_events(t, q, 0, 1, 0.0).open_phase, 0.1);
+  EXPECT_NEAR(*valve_events(t, q, 0, 1, 0.05).open_phase, 0.5 + 0.05 * 500 / 100 * 0.1, 1e-9);
+}
+
+}  // namespace
+}  // namespace systole::diagnostics
