@@ -1,0 +1,38 @@
+// systole-solve, the service-free runner: serial and under mpirun -np 2 give the same results;
+// bad input exits 2 with the field named.
+#include "tests/e2e/harness.h"
+
+namespace systole::e2e {
+namespace {
+
+nlohmann::json read_metrics(const fs::path& dir) { return nlohmann::json::parse(std::ifstream(dir / "metrics.json")); }
+
+TEST(SolveE2E, SerialAndTwoRanksWriteTheSameResults) {
+  const fs::path dir = make_temp_dir("solve");
+  const std::string solve = (bin_dir() / "systole-solve").string();
+  const std::string scenario = (source_dir() / "examples/healthy-0d.json").string();
+  auto [c1, out1] = run_command(solve + " " + scenario + " --quiet --out " + (dir / "serial").string());
+  ASSERT_EQ(c1, 0) << out1;
+  auto [c2, out2] = run_command("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun -np 2 --oversubscribe " +
+                                solve + " " + scenario + " --quiet --out " + (dir / "mpi").string());
+  ASSERT_EQ(c2, 0) << out2;
+  const auto a = read_metrics(dir / "serial");
+  const auto b = read_metrics(dir / "mpi");
+  for (const char* key : {"ejection_fraction_percent", "cardiac_output_l_min", "edv_ml", "esv_ml", "beats_simulated"})
+    EXPECT_EQ(a[key], b[key]) << key;  // the same deterministic computation on every rank
+  EXPECT_TRUE(fs::exists(dir / "mpi" / "result.h5"));
+  EXPECT_TRUE(fs::exists(dir / "mpi" / "pv_loop.csv"));
+  fs::remove_all(dir);
+}
+
+TEST(SolveE2E, BadInputExitsTwoNamingTheField) {
+  const std::string solve = (bin_dir() / "systole-solve").string();
+  const std::string scenario = (source_dir() / "examples/healthy-0d.json").string();
+  auto [code, output] = run_command(solve + " " + scenario + " --out /tmp/never --set av_delay_ms=900");
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(output.find("av_delay_ms = 900 is out of range [0, 400]"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists("/tmp/never/result.h5"));
+}
+
+}  // namespace
+}  // namespace systole::e2e
