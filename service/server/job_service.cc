@@ -11,6 +11,7 @@
 #include "proto/bridge/scenario_bridge.h"
 #include "service/server/sha256.h"
 #include "solver/core/errors.h"
+#include "solver/core/version.h"
 
 namespace systole::service {
 namespace fs = std::filesystem;
@@ -89,6 +90,16 @@ v1::JobEvent to_event(const store::Event& e) {
 
 }  // namespace
 
+std::string cache_key(const config::Scenario& scenario) {
+  Sha256 hash;
+  hash.update(config::to_json(scenario).dump());  // every default expanded, keys sorted
+  hash.update("|systole ");
+  hash.update(kVersion);
+  hash.update(" ");
+  hash.update(kGitRevision);
+  return hash.hex_digest();
+}
+
 int64_t now_ms() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
              std::chrono::system_clock::now().time_since_epoch())
@@ -138,6 +149,8 @@ v1::Job JobService::to_proto(const store::JobRecord& r, bool with_scenario) cons
   job.set_finished_ms(r.finished_ms);
   if (!r.progress_json.empty()) *job.mutable_progress() = json_to_message<v1::Progress>(r.progress_json);
   if (with_scenario) *job.mutable_scenario() = json_to_message<v1::Scenario>(r.scenario_json);
+  job.set_cached_from(r.cached_from);
+  job.set_campaign_id(r.campaign_id);
   return job;
 }
 
@@ -151,9 +164,14 @@ v1::SubmitJobResponse JobService::submit(const v1::SubmitJobRequest& request) {
     throw ServiceError(StatusCode::INVALID_ARGUMENT, "request_id is " + std::to_string(request.request_id().size()) +
                                                          " characters long; at most 128 allowed");
   const config::Scenario scenario = bridge::validate(request.scenario());  // InputError → 400
-  const int max_attempts = request.max_attempts() == 0 ? options_.default_max_attempts : request.max_attempts();
-  const auto outcome = store_.submit(request.request_id(), scenario.scene, bridge::to_json_text(request.scenario()),
-                                     request.priority(), max_attempts, now_ms());
+  store::NewJob job;
+  job.request_id = request.request_id();
+  job.scene = scenario.scene;
+  job.scenario_json = bridge::to_json_text(request.scenario());
+  job.priority = request.priority();
+  job.max_attempts = request.max_attempts() == 0 ? options_.default_max_attempts : request.max_attempts();
+  if (!request.no_cache()) job.cache_key = cache_key(scenario);
+  const auto outcome = store_.submit_job(job, now_ms());
   if (outcome.created) notifier_.notify();
   v1::SubmitJobResponse response;
   *response.mutable_job() = to_proto(outcome.job, true);

@@ -14,6 +14,7 @@
 #include <grpcpp/support/status.h>
 
 #include "service/store/job_store.h"
+#include "solver/config/scenario.h"
 #include "systole/v1/service.pb.h"
 #include "systole/v1/worker.pb.h"
 
@@ -51,6 +52,11 @@ struct ServiceOptions {
 };
 
 int64_t now_ms();
+
+// The result-cache key of a validated scenario: sha256 of its canonical JSON (every default
+// expanded, keys sorted) and the solver version and git revision. Jobs with equal keys compute
+// the same result, so a finished one can be reused.
+std::string cache_key(const config::Scenario& scenario);
 
 class JobService {
  public:

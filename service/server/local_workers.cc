@@ -91,6 +91,7 @@ void LocalWorkers::supervise() {
     std::unique_lock lock(mu_);
     cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return stopping_.load(); });
   }
+  drain();
 }
 
 LocalWorkers::~LocalWorkers() {
@@ -99,7 +100,12 @@ LocalWorkers::~LocalWorkers() {
     stopping_ = true;
   }
   cv_.notify_all();
-  supervisor_.join();
+  supervisor_.join();  // the supervisor drains the workers before it returns
+}
+
+// Runs on the supervisor thread: the thread that forked the workers must outlive them, since
+// PR_SET_PDEATHSIG fires when the *thread* that forked a child ends.
+void LocalWorkers::drain() {
   // SIGUSR1 is forwarded by mpirun to every rank (Open MPI's default signal forwarding): the
   // worker gives its job back (ReleaseJob) and exits, and then mpirun exits. SIGTERM after
   // 8 s, SIGKILL after 10 s.
@@ -121,7 +127,7 @@ LocalWorkers::~LocalWorkers() {
         ::waitpid(pid, nullptr, 0);
         break;
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
 }

@@ -33,9 +33,10 @@ class LocalWorkers {
  private:
   pid_t spawn(int slot);
   void supervise();
+  void drain();
 
   LocalWorkerOptions options_;
-  std::vector<pid_t> pids_;  // touched only by the supervisor thread (and the destructor after join)
+  std::vector<pid_t> pids_;  // touched only by the supervisor thread
   std::vector<int> generation_;
   std::atomic<int> restarts_{0};
   std::atomic<bool> stopping_{false};

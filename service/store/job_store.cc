@@ -84,6 +84,31 @@ CREATE TABLE artifacts (
   PRIMARY KEY (job_id, name)
 ) WITHOUT ROWID;
 )sql"},
+    {2, "result cache and campaigns", R"sql(
+ALTER TABLE jobs ADD COLUMN cache_key   TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN cached_from TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN campaign_id TEXT NOT NULL DEFAULT '';
+CREATE INDEX jobs_by_cache_key ON jobs (cache_key, state, finished_ms) WHERE cache_key != '';
+
+CREATE TABLE campaigns (
+  id         TEXT    PRIMARY KEY,
+  request_id TEXT,
+  spec_json  TEXT    NOT NULL,
+  cancelled  INTEGER NOT NULL DEFAULT 0,
+  created_ms INTEGER NOT NULL,
+  updated_ms INTEGER NOT NULL
+);
+CREATE UNIQUE INDEX campaigns_by_request_id ON campaigns (request_id) WHERE request_id IS NOT NULL;
+CREATE INDEX campaigns_newest_first ON campaigns (created_ms DESC, id);
+
+CREATE TABLE campaign_samples (
+  campaign_id  TEXT    NOT NULL REFERENCES campaigns (id) ON DELETE CASCADE,
+  sample_index INTEGER NOT NULL,
+  job_id       TEXT    NOT NULL REFERENCES jobs (id),
+  inputs_json  TEXT    NOT NULL,
+  PRIMARY KEY (campaign_id, sample_index)
+) WITHOUT ROWID;
+)sql"},
 };
 
 constexpr int kLatestVersion = kMigrations[std::size(kMigrations) - 1].version;
@@ -201,7 +226,7 @@ class Txn {
 #define SYSTOLE_JOB_COLUMNS                                                               \
   "id, COALESCE(request_id, ''), scene, scenario_json, worker_id, error, state, priority, " \
   "attempts, max_attempts, cancel_requested, created_ms, updated_ms, started_ms, "         \
-  "finished_ms, lease_expires_ms, progress_json"
+  "finished_ms, lease_expires_ms, progress_json, cache_key, cached_from, campaign_id"
 
 JobRecord read_job(const Stmt& s) {
   JobRecord job;
@@ -228,6 +253,9 @@ JobRecord read_job(const Stmt& s) {
   job.finished_ms = s.col_int(14);
   job.lease_expires_ms = s.col_int(15);
   job.progress_json = s.col_text(16);
+  job.cache_key = s.col_text(17);
+  job.cached_from = s.col_text(18);
+  job.campaign_id = s.col_text(19);
   return job;
 }
 
@@ -579,10 +607,30 @@ std::string JobStore::new_job_id() {
 SubmitOutcome JobStore::submit(const std::string& request_id, const std::string& scene,
                                const std::string& scenario_json, int priority, int max_attempts,
                                int64_t now_ms) {
-  check_range("priority", priority, kMinPriority, kMaxPriority);
-  check_range("max_attempts", max_attempts, kMinMaxAttempts, kMaxMaxAttempts);
-  if (scene.empty()) throw StoreError(Code::kInvalidArgument, "scene must not be empty");
-  const json scenario = parse_json_arg(scenario_json, "scenario_json");
+  NewJob job;
+  job.request_id = request_id;
+  job.scene = scene;
+  job.scenario_json = scenario_json;
+  job.priority = priority;
+  job.max_attempts = max_attempts;
+  return submit_job(job, now_ms);
+}
+
+namespace {
+void validate_new_job(const NewJob& job) {
+  check_range("priority", job.priority, JobStore::kMinPriority, JobStore::kMaxPriority);
+  check_range("max_attempts", job.max_attempts, JobStore::kMinMaxAttempts, JobStore::kMaxMaxAttempts);
+  if (job.scene.empty()) throw StoreError(Code::kInvalidArgument, "scene must not be empty");
+  (void)parse_json_arg(job.scenario_json, "scenario_json");
+}
+}  // namespace
+
+SubmitOutcome JobStore::submit_job(const NewJob& new_job, int64_t now_ms) {
+  validate_new_job(new_job);
+  const json scenario = json::parse(new_job.scenario_json);
+  const std::string& request_id = new_job.request_id;
+  const std::string& scene = new_job.scene;
+  const int priority = new_job.priority;
 
   std::lock_guard lock(mu_);
   Txn txn(db_, Txn::Kind::kWrite);
@@ -616,26 +664,66 @@ SubmitOutcome JobStore::submit(const std::string& request_id, const std::string&
       return SubmitOutcome{std::move(*existing), false};
     }
   }
+  JobRecord job = insert_job_locked(new_job, "", now_ms);
+  txn.commit();
+  return SubmitOutcome{std::move(job), true};
+}
 
+JobRecord JobStore::insert_job_locked(const NewJob& new_job, const std::string& campaign_id,
+                                      int64_t now_ms) {
+  std::string cached_from;
+  if (!new_job.cache_key.empty()) {
+    Stmt s(db_, prepare("SELECT j.id FROM jobs j JOIN results r ON r.job_id = j.id "
+                        "WHERE j.cache_key = ?1 AND j.state = 'SUCCEEDED' "
+                        "ORDER BY j.finished_ms, j.id LIMIT 1"));
+    s.bind_text(1, new_job.cache_key);
+    if (s.step()) cached_from = s.col_text(0);
+  }
   const std::string id = new_job_id();
   {
     Stmt s(db_, prepare("INSERT INTO jobs (id, request_id, scene, scenario_json, state, priority, "
-                        "max_attempts, created_ms, updated_ms) "
-                        "VALUES (?1, ?2, ?3, ?4, 'QUEUED', ?5, ?6, ?7, ?7)"));
+                        "max_attempts, created_ms, updated_ms, cache_key, campaign_id) "
+                        "VALUES (?1, ?2, ?3, ?4, 'QUEUED', ?5, ?6, ?7, ?7, ?8, ?9)"));
     s.bind_text(1, id);
-    if (request_id.empty()) {
+    if (new_job.request_id.empty()) {
       s.bind_null(2);
     } else {
-      s.bind_text(2, request_id);
+      s.bind_text(2, new_job.request_id);
     }
-    s.bind_text(3, scene).bind_text(4, scenario_json).bind_int(5, priority);
-    s.bind_int(6, max_attempts).bind_int(7, now_ms);
+    s.bind_text(3, new_job.scene).bind_text(4, new_job.scenario_json).bind_int(5, new_job.priority);
+    s.bind_int(6, new_job.max_attempts).bind_int(7, now_ms);
+    s.bind_text(8, new_job.cache_key).bind_text(9, campaign_id);
     s.run();
   }
   append_event(id, now_ms, "state", dump({{"state", "QUEUED"}}));
-  JobRecord job = require_job(id);
-  txn.commit();
-  return SubmitOutcome{std::move(job), true};
+  if (!cached_from.empty()) {
+    // Reuse: the result row and the artifact index are copied (the files are shared and are
+    // never deleted while indexed).
+    {
+      Stmt s(db_, prepare("INSERT INTO results (job_id, metrics_json, timeseries_json, created_ms) "
+                          "SELECT ?1, metrics_json, timeseries_json, ?3 FROM results WHERE job_id = ?2"));
+      s.bind_text(1, id).bind_text(2, cached_from).bind_int(3, now_ms);
+      s.run();
+    }
+    {
+      Stmt s(db_, prepare("INSERT INTO artifacts (job_id, name, path, sha256, size_bytes) "
+                          "SELECT ?1, name, path, sha256, size_bytes FROM artifacts WHERE job_id = ?2"));
+      s.bind_text(1, id).bind_text(2, cached_from);
+      s.run();
+    }
+    {
+      Stmt s(db_, prepare("UPDATE jobs SET state = 'SUCCEEDED', cached_from = ?2, started_ms = ?3, "
+                          "finished_ms = ?3, updated_ms = ?3 WHERE id = ?1"));
+      s.bind_text(1, id).bind_text(2, cached_from).bind_int(3, now_ms);
+      s.run();
+    }
+    append_event(id, now_ms, "state",
+                 dump({{"state", "SUCCEEDED"},
+                       {"cached_from", cached_from},
+                       {"reason", "result reused from job " + cached_from +
+                                      " (same canonical scenario and solver version)"}}));
+  }
+  return require_job(id);
 }
 
 std::optional<JobRecord> JobStore::get(const std::string& id) {
@@ -955,6 +1043,216 @@ std::vector<Event> JobStore::events(const std::string& job_id, int64_t after_seq
   }
   txn.commit();
   return out;
+}
+
+// ---- campaigns ---------------------------------------------------------------------------
+
+std::optional<CampaignRecord> JobStore::get_campaign_locked(const std::string& id) {
+  CampaignRecord c;
+  {
+    Stmt s(db_, prepare("SELECT id, COALESCE(request_id, ''), spec_json, cancelled, created_ms "
+                        "FROM campaigns WHERE id = ?1"));
+    s.bind_text(1, id);
+    if (!s.step()) return std::nullopt;
+    c.id = s.col_text(0);
+    c.request_id = s.col_text(1);
+    c.spec_json = s.col_text(2);
+    c.cancelled = s.col_int(3) != 0;
+    c.created_ms = s.col_int(4);
+  }
+  {
+    Stmt s(db_, prepare("SELECT j.state, COUNT(*), SUM(j.cached_from != '') FROM campaign_samples c "
+                        "JOIN jobs j ON j.id = c.job_id WHERE c.campaign_id = ?1 GROUP BY j.state"));
+    s.bind_text(1, id);
+    while (s.step()) {
+      const auto state = from_string(s.col_text(0));
+      if (!state) continue;
+      c.jobs_by_state.emplace_back(*state, s.col_int(1));
+      c.jobs_total += s.col_int(1);
+      c.jobs_cached += s.col_int(2);
+    }
+  }
+  return c;
+}
+
+CampaignOutcome JobStore::create_campaign(const std::string& request_id, const std::string& spec_json,
+                                          const std::vector<NewJob>& jobs,
+                                          const std::vector<std::string>& inputs_json, int64_t now_ms) {
+  const json spec = parse_json_arg(spec_json, "spec_json");
+  if (jobs.empty()) throw StoreError(Code::kInvalidArgument, "a campaign needs at least one job");
+  if (jobs.size() != inputs_json.size())
+    throw StoreError(Code::kInvalidArgument, "jobs and inputs_json differ in length");
+  for (const NewJob& job : jobs) validate_new_job(job);
+  for (const auto& inputs : inputs_json) (void)parse_json_arg(inputs, "inputs_json");
+
+  std::lock_guard lock(mu_);
+  Txn txn(db_, Txn::Kind::kWrite);
+  if (!request_id.empty()) {
+    std::string existing_id, existing_spec;
+    {
+      Stmt s(db_, prepare("SELECT id, spec_json FROM campaigns WHERE request_id = ?1"));
+      s.bind_text(1, request_id);
+      if (s.step()) {
+        existing_id = s.col_text(0);
+        existing_spec = s.col_text(1);
+      }
+    }
+    if (!existing_id.empty()) {
+      if (json::parse(existing_spec) != spec)
+        throw StoreError(Code::kAlreadyExists, "request_id '" + request_id +
+                                                   "' was already used for campaign " + existing_id +
+                                                   " with a different spec");
+      return CampaignOutcome{*get_campaign_locked(existing_id), false};
+    }
+  }
+  std::string id = "c" + new_job_id().substr(1);  // "c-" + 16 hex digits
+  {
+    Stmt s(db_, prepare("INSERT INTO campaigns (id, request_id, spec_json, created_ms, updated_ms) "
+                        "VALUES (?1, ?2, ?3, ?4, ?4)"));
+    s.bind_text(1, id);
+    if (request_id.empty()) {
+      s.bind_null(2);
+    } else {
+      s.bind_text(2, request_id);
+    }
+    s.bind_text(3, spec_json).bind_int(4, now_ms);
+    s.run();
+  }
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    NewJob job = jobs[i];
+    job.request_id.clear();
+    const JobRecord inserted = insert_job_locked(job, id, now_ms);
+    Stmt s(db_, prepare("INSERT INTO campaign_samples (campaign_id, sample_index, job_id, inputs_json) "
+                        "VALUES (?1, ?2, ?3, ?4)"));
+    s.bind_text(1, id).bind_int(2, static_cast<int64_t>(i)).bind_text(3, inserted.id).bind_text(4, inputs_json[i]);
+    s.run();
+  }
+  CampaignRecord record = *get_campaign_locked(id);
+  txn.commit();
+  return CampaignOutcome{std::move(record), true};
+}
+
+std::optional<CampaignRecord> JobStore::get_campaign(const std::string& id) {
+  std::lock_guard lock(mu_);
+  Txn txn(db_, Txn::Kind::kRead);
+  auto c = get_campaign_locked(id);
+  txn.commit();
+  return c;
+}
+
+CampaignPage JobStore::list_campaigns(int page_size, const std::string& page_token) {
+  if (page_size == 0) page_size = kDefaultPageSize;
+  check_range("page_size", page_size, 1, kMaxPageSize);
+  int64_t offset = 0;
+  if (!page_token.empty()) {
+    const auto [ptr, ec] = std::from_chars(page_token.data(), page_token.data() + page_token.size(), offset);
+    if (ec != std::errc() || ptr != page_token.data() + page_token.size() || offset < 0)
+      throw StoreError(Code::kInvalidArgument, "page_token '" + page_token + "' is not a token from list_campaigns");
+  }
+  std::lock_guard lock(mu_);
+  Txn txn(db_, Txn::Kind::kRead);
+  std::vector<std::string> ids;
+  {
+    Stmt s(db_, prepare("SELECT id FROM campaigns ORDER BY created_ms DESC, id LIMIT ?1 OFFSET ?2"));
+    s.bind_int(1, page_size + 1).bind_int(2, offset);
+    while (s.step()) ids.push_back(s.col_text(0));
+  }
+  CampaignPage page;
+  const bool more = ids.size() > static_cast<size_t>(page_size);
+  if (more) ids.pop_back();
+  for (const auto& id : ids) page.campaigns.push_back(*get_campaign_locked(id));
+  if (more) page.next_page_token = std::to_string(offset + page_size);
+  txn.commit();
+  return page;
+}
+
+std::vector<CampaignSampleRow> JobStore::campaign_samples(const std::string& id) {
+  std::lock_guard lock(mu_);
+  Txn txn(db_, Txn::Kind::kRead);
+  if (!get_campaign_locked(id)) throw StoreError(Code::kNotFound, "campaign " + id + " not found");
+  std::vector<CampaignSampleRow> rows;
+  {
+    Stmt s(db_, prepare("SELECT c.sample_index, c.job_id, c.inputs_json, j.state, j.error, j.cached_from, "
+                        "COALESCE(r.metrics_json, '') FROM campaign_samples c JOIN jobs j ON j.id = c.job_id "
+                        "LEFT JOIN results r ON r.job_id = c.job_id WHERE c.campaign_id = ?1 "
+                        "ORDER BY c.sample_index"));
+    s.bind_text(1, id);
+    while (s.step()) {
+      CampaignSampleRow row;
+      row.index = s.col_int(0);
+      row.job_id = s.col_text(1);
+      row.inputs_json = s.col_text(2);
+      row.state = from_string(s.col_text(3)).value_or(JobState::kFailed);
+      row.error = s.col_text(4);
+      row.cached_from = s.col_text(5);
+      row.metrics_json = s.col_text(6);
+      rows.push_back(std::move(row));
+    }
+  }
+  txn.commit();
+  return rows;
+}
+
+CampaignRecord JobStore::cancel_campaign(const std::string& id, int64_t now_ms) {
+  std::lock_guard lock(mu_);
+  Txn txn(db_, Txn::Kind::kWrite);
+  if (!get_campaign_locked(id)) throw StoreError(Code::kNotFound, "campaign " + id + " not found");
+  std::vector<JobRecord> open;
+  {
+    Stmt s(db_, prepare("SELECT " SYSTOLE_JOB_COLUMNS " FROM jobs WHERE campaign_id = ?1 AND "
+                        "state IN ('QUEUED', 'RUNNING')"));
+    s.bind_text(1, id);
+    while (s.step()) open.push_back(read_job(s));
+  }
+  for (const JobRecord& job : open) {
+    if (job.state == JobState::kQueued) {
+      finish_locked(job, JobState::kCancelled, "", dump({{"state", "CANCELLED"}, {"reason", "campaign cancelled"}}),
+                    now_ms);
+    } else if (!job.cancel_requested) {
+      Stmt s(db_, prepare("UPDATE jobs SET cancel_requested = 1, updated_ms = ?2 WHERE id = ?1"));
+      s.bind_text(1, job.id).bind_int(2, now_ms);
+      s.run();
+      append_event(job.id, now_ms, "cancel_requested", dump({{"worker", job.worker_id}, {"reason", "campaign cancelled"}}));
+    }
+  }
+  {
+    Stmt s(db_, prepare("UPDATE campaigns SET cancelled = 1, updated_ms = ?2 WHERE id = ?1"));
+    s.bind_text(1, id).bind_int(2, now_ms);
+    s.run();
+  }
+  CampaignRecord record = *get_campaign_locked(id);
+  txn.commit();
+  return record;
+}
+
+CampaignRecord JobStore::retry_failed(const std::string& id, int64_t now_ms) {
+  std::lock_guard lock(mu_);
+  Txn txn(db_, Txn::Kind::kWrite);
+  if (!get_campaign_locked(id)) throw StoreError(Code::kNotFound, "campaign " + id + " not found");
+  std::vector<std::string> ids;
+  {
+    Stmt s(db_, prepare("SELECT id FROM jobs WHERE campaign_id = ?1 AND state IN ('FAILED', 'CANCELLED')"));
+    s.bind_text(1, id);
+    while (s.step()) ids.push_back(s.col_text(0));
+  }
+  for (const auto& job_id : ids) {
+    {
+      Stmt s(db_, prepare("UPDATE jobs SET state = 'QUEUED', attempts = 0, error = '', cancel_requested = 0, "
+                          "worker_id = '', finished_ms = 0, lease_expires_ms = 0, lease_ms = 0, progress_json = '', "
+                          "updated_ms = ?2 WHERE id = ?1"));
+      s.bind_text(1, job_id).bind_int(2, now_ms);
+      s.run();
+    }
+    append_event(job_id, now_ms, "state", dump({{"state", "QUEUED"}, {"reason", "retry requested"}}));
+  }
+  {
+    Stmt s(db_, prepare("UPDATE campaigns SET cancelled = 0, updated_ms = ?2 WHERE id = ?1"));
+    s.bind_text(1, id).bind_int(2, now_ms);
+    s.run();
+  }
+  CampaignRecord record = *get_campaign_locked(id);
+  txn.commit();
+  return record;
 }
 
 int64_t JobStore::count(std::optional<JobState> state) {

@@ -68,6 +68,53 @@ struct JobRecord {
   int64_t finished_ms = 0;       // entering a terminal state; 0 otherwise
   int64_t lease_expires_ms = 0;  // while RUNNING; 0 otherwise
   std::string progress_json;     // latest progress payload, "" if none yet
+  std::string cache_key;         // "" if the job may not reuse or be reused
+  std::string cached_from;       // the job whose result this one reuses; "" if it ran itself
+  std::string campaign_id;       // "" unless the job is a sample of a campaign
+};
+
+// A job to insert (submit_job, create_campaign).
+struct NewJob {
+  std::string request_id;  // "" for none (campaign jobs have none)
+  std::string scene;
+  std::string scenario_json;
+  int priority = 0;
+  int max_attempts = 3;
+  // Canonical scenario + solver version digest. Non-empty: if a SUCCEEDED job has the same
+  // key, the new job is created SUCCEEDED with a copy of that job's result (same artifact
+  // files) and cached_from set, instead of being queued.
+  std::string cache_key;
+};
+
+struct CampaignRecord {
+  std::string id;
+  std::string request_id;
+  std::string spec_json;
+  int64_t created_ms = 0;
+  bool cancelled = false;
+  int64_t jobs_total = 0;
+  int64_t jobs_cached = 0;
+  std::vector<std::pair<JobState, int64_t>> jobs_by_state;  // states with at least one job
+};
+
+struct CampaignOutcome {
+  CampaignRecord campaign;
+  bool created = false;
+};
+
+struct CampaignSampleRow {
+  int64_t index = 0;
+  std::string job_id;
+  std::string inputs_json;
+  JobState state = JobState::kQueued;
+  std::string error;
+  std::string cached_from;
+  std::string metrics_json;  // the job's result metrics; "" unless SUCCEEDED
+};
+
+struct CampaignPage {
+  std::vector<CampaignRecord> campaigns;
+  std::string next_page_token;
 };
 
 struct SubmitOutcome {
@@ -213,6 +260,26 @@ class JobStore {
   // Number of jobs, all or in one state.
   int64_t count(std::optional<JobState> state);
 
+  // ---- result cache and campaigns (schema 2) ----------------------------------------------
+
+  // submit() with a cache key (see NewJob). request_id idempotency as in submit().
+  SubmitOutcome submit_job(const NewJob& job, int64_t now_ms);
+
+  // Inserts a campaign and all its jobs (one per sample, inputs_json[i] for sample i) in one
+  // transaction. Idempotent on a non-empty request_id: the same spec_json returns the first
+  // campaign (created=false), a different one throws kAlreadyExists.
+  CampaignOutcome create_campaign(const std::string& request_id, const std::string& spec_json,
+                                  const std::vector<NewJob>& jobs,
+                                  const std::vector<std::string>& inputs_json, int64_t now_ms);
+  std::optional<CampaignRecord> get_campaign(const std::string& id);
+  CampaignPage list_campaigns(int page_size, const std::string& page_token);
+  // Every sample, by index, with its job's state, error and result metrics.
+  std::vector<CampaignSampleRow> campaign_samples(const std::string& id);
+  // Cancels every QUEUED job and requests cancel of every RUNNING one; marks the campaign.
+  CampaignRecord cancel_campaign(const std::string& id, int64_t now_ms);
+  // FAILED and CANCELLED samples go back to QUEUED with attempts = 0 (event "retry").
+  CampaignRecord retry_failed(const std::string& id, int64_t now_ms);
+
  private:
   // All of these require mu_ (or run in the constructor/destructor, before/after sharing).
   sqlite3_stmt* prepare(const char* sql);  // cached per SQL text
@@ -233,6 +300,9 @@ class JobStore {
   void finish_locked(const JobRecord& job, JobState state, const std::string& error,
                      const std::string& event_payload, int64_t now_ms);
   std::string new_job_id();
+  // Inserts one job (QUEUED, or SUCCEEDED from the cache); requires mu_ and a write Txn.
+  JobRecord insert_job_locked(const NewJob& job, const std::string& campaign_id, int64_t now_ms);
+  std::optional<CampaignRecord> get_campaign_locked(const std::string& id);
 
   std::mutex mu_;
   // Guarded by mu_: the connection (and every statement prepared on it), the statement cache

@@ -1,6 +1,7 @@
 #include "solver/config/geometry_rules.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <sstream>
@@ -17,7 +18,7 @@ constexpr double kRimMm = 2.5;          // plane between an orifice and the LV b
 constexpr double kMinCurtainMm = 3.0;   // between the two orifices
 constexpr double kLaAspect = 0.85;      // LA polar / equatorial semi-axis
 constexpr double kMinGapMm = 2.0;       // between unattached bodies
-constexpr double kSinusCommissureShare = 0.25;
+constexpr double kSinusCommissureShare = 0.15;
 constexpr double kRootHeightPerDiameter = 0.5;
 
 double bisect(const std::function<double(double)>& f, double target, double lo, double hi) {

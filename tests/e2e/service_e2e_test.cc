@@ -268,5 +268,32 @@ TEST_F(ServiceE2E, CliRunStatusListResults) {
   EXPECT_NE(unreachable.find("cannot reach systole-server"), std::string::npos) << unreachable;
 }
 
+TEST_F(ServiceE2E, IdenticalScenarioReusesTheFinishedResultUnlessNoCache) {
+  // Defaults written out explicitly are the same canonical scenario as defaults left out.
+  const std::string first = submit(*server_, {{"scene", "lumped"}, {"heart_rate_bpm", 66}});
+  ASSERT_TRUE(wait_for_state(*server_, first, v1::SUCCEEDED, std::chrono::seconds(60)));
+  const std::string again = submit(*server_, {{"heart_rate_bpm", 66.0}, {"av_delay_ms", 100}});
+  const v1::Job cached = get_job(*server_, again);
+  EXPECT_EQ(cached.state(), v1::SUCCEEDED);
+  EXPECT_EQ(cached.cached_from(), first);
+  EXPECT_EQ(cached.attempts(), 0);  // never ran
+  v1::GetResultRequest request;
+  request.set_id(again);
+  v1::Result result;
+  auto context = deadline_context();
+  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  EXPECT_EQ(result.artifacts_size(), 3);
+  // no_cache runs it again.
+  v1::SubmitJobRequest fresh;
+  *fresh.mutable_scenario() = scenario_from_json({{"heart_rate_bpm", 66}});
+  fresh.set_no_cache(true);
+  v1::SubmitJobResponse response;
+  auto ctx = deadline_context();
+  ASSERT_TRUE(server_->stub().SubmitJob(ctx.get(), fresh, &response).ok());
+  EXPECT_TRUE(response.job().cached_from().empty());
+  ASSERT_TRUE(wait_for_state(*server_, response.job().id(), v1::SUCCEEDED, std::chrono::seconds(60)));
+  EXPECT_EQ(get_job(*server_, response.job().id()).attempts(), 1);
+}
+
 }  // namespace
 }  // namespace systole::e2e

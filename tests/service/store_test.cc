@@ -1060,4 +1060,114 @@ TEST_F(JobStoreTest, ConcurrentLeasingHandsOutEachJobExactlyOnce) {
 }
 
 }  // namespace
+
+// ---- result cache and campaigns (schema 2) ---------------------------------------------------
+
+NewJob cached_job(const std::string& key, const std::string& scenario = R"({"heart_rate_bpm":70})") {
+  NewJob job;
+  job.scene = "lumped";
+  job.scenario_json = scenario;
+  job.cache_key = key;
+  return job;
+}
+
+TEST_F(JobStoreTest, CacheReusesASucceededJobsResultAndSaysSo) {
+  const JobRecord first = store().submit_job(cached_job("key-a"), kT0).job;
+  EXPECT_EQ(first.state, JobState::kQueued);
+  EXPECT_TRUE(first.cached_from.empty());
+  // Not yet succeeded: a second job with the same key is queued too.
+  const JobRecord second = store().submit_job(cached_job("key-a"), kT0 + 1).job;
+  EXPECT_EQ(second.state, JobState::kQueued);
+  auto lease = store().lease("w1", kLease, kT0 + 2);
+  ASSERT_TRUE(lease && lease->job.id == first.id);
+  store().add_artifact(first.id, "w1", Artifact{"result.h5", "/data/a/result.h5", "abc", 10});
+  store().complete(first.id, "w1", R"({"metrics":{"edv_ml":125}})", "", kT0 + 3);
+  const JobRecord third = store().submit_job(cached_job("key-a"), kT0 + 4).job;
+  EXPECT_EQ(third.state, JobState::kSucceeded);
+  EXPECT_EQ(third.cached_from, first.id);
+  const auto result = store().result(third.id);
+  ASSERT_TRUE(result.has_value());
+  EXPECT_EQ(result->metrics_json, R"({"metrics":{"edv_ml":125}})");
+  ASSERT_EQ(result->artifacts.size(), 1u);
+  EXPECT_EQ(result->artifacts[0].path, "/data/a/result.h5");
+  const auto states = state_events(third.id);
+  ASSERT_EQ(states.size(), 2u);
+  EXPECT_EQ(states[1]["cached_from"], first.id);
+  // Another key, or no key, never reuses.
+  EXPECT_EQ(store().submit_job(cached_job("key-b"), kT0 + 5).job.state, JobState::kQueued);
+  EXPECT_EQ(store().submit_job(cached_job(""), kT0 + 6).job.state, JobState::kQueued);
+}
+
+TEST_F(JobStoreTest, CampaignInsertsAllJobsAtomicallyAndCountsStates) {
+  std::vector<NewJob> jobs;
+  std::vector<std::string> inputs;
+  for (int i = 0; i < 5; ++i) {
+    jobs.push_back(cached_job("", "{\"heart_rate_bpm\":" + std::to_string(60 + i) + "}"));
+    inputs.push_back("{\"heart_rate_bpm\":" + std::to_string(60 + i) + "}");
+  }
+  const auto outcome = store().create_campaign("camp-1", R"({"samples":5})", jobs, inputs, kT0);
+  EXPECT_TRUE(outcome.created);
+  EXPECT_EQ(outcome.campaign.jobs_total, 5);
+  EXPECT_EQ(store().count(JobState::kQueued), 5);
+  // Idempotent; a different spec under the same request_id is refused and adds nothing.
+  EXPECT_FALSE(store().create_campaign("camp-1", R"({"samples":5})", jobs, inputs, kT0 + 1).created);
+  try {
+    store().create_campaign("camp-1", R"({"samples":6})", jobs, inputs, kT0 + 1);
+    FAIL() << "expected kAlreadyExists";
+  } catch (const StoreError& e) {
+    EXPECT_EQ(e.code(), StoreError::Code::kAlreadyExists);
+  }
+  EXPECT_EQ(store().count(std::nullopt), 5);
+  // A bad input row rejects the whole campaign.
+  inputs[2] = "not json";
+  EXPECT_THROW(store().create_campaign("", R"({})", jobs, inputs, kT0 + 2), StoreError);
+  EXPECT_EQ(store().count(std::nullopt), 5);
+
+  const std::string id = outcome.campaign.id;
+  auto lease = store().lease("w1", kLease, kT0 + 3);
+  ASSERT_TRUE(lease.has_value());
+  const std::string done = lease->job.id;
+  store().complete(done, "w1", R"({"metrics":{"edv_ml":120}})", "", kT0 + 4);
+  lease = store().lease("w1", kLease, kT0 + 5);
+  const std::string failed = lease->job.id;
+  store().fail(failed, "w1", "unstable", false, kT0 + 6);
+  const auto rows = store().campaign_samples(id);
+  ASSERT_EQ(rows.size(), 5u);
+  std::map<std::string, CampaignSampleRow> by_job;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].index, static_cast<int64_t>(i));
+    EXPECT_EQ(rows[i].inputs_json, "{\"heart_rate_bpm\":" + std::to_string(60 + i) + "}");
+    EXPECT_EQ(store().get(rows[i].job_id)->campaign_id, id);
+    by_job[rows[i].job_id] = rows[i];
+  }
+  EXPECT_EQ(by_job[done].state, JobState::kSucceeded);
+  EXPECT_EQ(by_job[done].metrics_json, R"({"metrics":{"edv_ml":120}})");
+  EXPECT_EQ(by_job[failed].state, JobState::kFailed);
+  EXPECT_EQ(by_job[failed].error, "unstable");
+
+  // Cancel: the queued ones are cancelled, the running one asked to stop; retry brings the
+  // failed and cancelled ones back.
+  lease = store().lease("w1", kLease, kT0 + 7);
+  const std::string running = lease->job.id;
+  const CampaignRecord cancelled = store().cancel_campaign(id, kT0 + 8);
+  EXPECT_TRUE(cancelled.cancelled);
+  EXPECT_TRUE(store().get(running)->cancel_requested);
+  EXPECT_EQ(store().count(JobState::kCancelled), 2);
+  store().acknowledge_cancel(running, "w1", kT0 + 9);
+  const CampaignRecord retried = store().retry_failed(id, kT0 + 10);
+  EXPECT_FALSE(retried.cancelled);
+  EXPECT_EQ(store().get(failed)->state, JobState::kQueued);
+  EXPECT_EQ(store().get(failed)->attempts, 0);
+  EXPECT_EQ(store().get(running)->state, JobState::kQueued);
+  EXPECT_EQ(store().get(done)->state, JobState::kSucceeded);
+  EXPECT_EQ(store().count(JobState::kQueued), 4);
+  // Listing and persistence.
+  reopen();
+  const auto page = store().list_campaigns(10, "");
+  ASSERT_EQ(page.campaigns.size(), 1u);
+  EXPECT_EQ(page.campaigns[0].id, id);
+  EXPECT_EQ(page.campaigns[0].jobs_total, 5);
+  EXPECT_THROW(store().campaign_samples("c-missing"), StoreError);
+}
+
 }  // namespace systole::store

@@ -1,0 +1,746 @@
+#include "solver/geometry/left_heart.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+
+#include "solver/config/geometry_rules.h"
+#include "solver/core/errors.h"
+#include "solver/geometry/diagnostics.h"
+#include "solver/geometry/meshing.h"
+#include "solver/geometry/quality.h"
+#include "solver/geometry/topology.h"
+
+namespace systole::geometry {
+
+namespace {
+
+using detail::Ring;
+using detail::Vec2;
+
+// ---- (ours) construction constants, documented in docs/geometry.md -------------------------
+constexpr double kRimMm = 2.5;            // plane between an orifice and the LV base ring
+constexpr double kMinCurtainMm = 3.0;     // aorto-mitral curtain between the two orifices
+constexpr double kLaAspect = 0.85;        // LA polar / equatorial semi-axis
+constexpr double kSinusCommissureShare = 0.15;  // sinus bulge left at the commissures
+constexpr double kRootHeightPerDiameter = 0.5;  // annulus -> sino-tubular junction
+constexpr double kCuspHeightPerRadius = 0.5;    // closed cusp tip height / aortic radius
+constexpr double kArchRadiusPerTubeRadius = 1.3;  // minimum arch bend radius
+constexpr double kLayoutGapMm = 4.0;      // design gap used to place the descending aorta
+constexpr double kPatchRadiusMm = 5.0;    // Bachmann and His stimulus patches
+constexpr double kOutflowLengthPerDiameter = 1.5;
+constexpr double kDescendingTaperPerDiameter = 2.0;
+constexpr double kPlaneBandMm = 3.0;      // clearance is not measured this close to the plane
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw InputError("invalid geometry: " + message);
+}
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(4);
+  s << v;
+  return s.str();
+}
+
+double smoothstep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * (3 - 2 * x);
+}
+
+// Fraction of the circumscribing half-ellipsoid-cylinder volume pi a^2 L held by an ellipsoid
+// truncated at u = -t (t in (-1, 0.5]): f(t) = (2/3 + t - t^3/3) / (1 + t), increasing.
+double truncated_fraction(double t) { return (2.0 / 3.0 + t - t * t * t / 3.0) / (1.0 + t); }
+
+double solve_increasing(const std::function<double(double)>& f, double target, double lo, double hi) {
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (f(mid) < target ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Dense samples of a meridian given as a function of a parameter: returns stations with equal
+// arclength spacing (about `spacing`), at least `min_segments`.
+std::vector<double> meridian_stations(const std::function<Vec2(double)>& curve, double p0, double p1,
+                                      double spacing, int min_segments) {
+  const int dense = 4000;
+  std::vector<double> param(dense + 1), arc(dense + 1, 0.0);
+  Vec2 prev = curve(p0);
+  for (int i = 0; i <= dense; ++i) {
+    param[i] = p0 + (p1 - p0) * i / dense;
+    const Vec2 q = curve(param[i]);
+    if (i) arc[i] = arc[i - 1] + (q - prev).norm();
+    prev = q;
+  }
+  const int n = std::max(min_segments, static_cast<int>(std::lround(arc.back() / spacing)));
+  return detail::equal_arclength_stations(param, arc, n);
+}
+
+int ring_count(double radius, double spacing, int min_count = 6) {
+  return std::max(min_count, static_cast<int>(std::lround(2 * M_PI * radius / spacing)));
+}
+
+// Appends a ring of nodes centred at `centre` in the frame (e1, e2): node i at angle
+// (2i + 1) pi / n, radius radius_of(angle).
+Ring add_ring(TriMesh& mesh, int n, const Vec3& centre, const Vec3& e1, const Vec3& e2,
+              const std::function<double(double)>& radius_of, std::uint32_t tags) {
+  Ring ring;
+  for (int i = 0; i < n; ++i) {
+    const double th = (2 * i + 1) * M_PI / n;
+    const double r = radius_of(th);
+    ring.node.push_back(mesh.add_node(centre + r * (std::cos(th) * e1 + std::sin(th) * e2), tags));
+    ring.angle.push_back(th);
+  }
+  return ring;
+}
+
+// Copies the nodes of `source` (positions only) into `mesh` as a ring with the same angles.
+Ring copy_ring(TriMesh& mesh, const TriMesh& source, const Ring& ring, std::uint32_t tags) {
+  Ring out;
+  for (std::size_t i = 0; i < ring.node.size(); ++i) {
+    out.node.push_back(mesh.add_node(source.position_mm[ring.node[i]], tags));
+    out.angle.push_back(ring.angle[i]);
+  }
+  return out;
+}
+
+void add_triangles(TriMesh& mesh, const std::vector<Tri>& tris, Tissue tissue, double thickness) {
+  for (const auto& t : tris) mesh.add_triangle(t[0], t[1], t[2], tissue, thickness);
+}
+
+// Tags every node within `radius` of the mesh node closest to `target`.
+void tag_patch(TriMesh& mesh, const Vec3& target, double radius, std::uint32_t bit) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < mesh.node_count(); ++i)
+    if ((mesh.position_mm[i] - target).squaredNorm() < (mesh.position_mm[best] - target).squaredNorm())
+      best = i;
+  const Vec3 c = mesh.position_mm[best];
+  for (std::size_t i = 0; i < mesh.node_count(); ++i)
+    if ((mesh.position_mm[i] - c).norm() <= radius) mesh.region[i] |= bit;
+}
+
+double distance_to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double w = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - (a + w * ab)).norm();
+}
+
+// A leaflet as a height field over a convex planar domain: boundary nodes are given in 3D
+// (annulus nodes copied from the ring, free-edge nodes), interior points in 2D get
+// z = height(x, y). Normals face -z (the "+" side, ours).
+struct GraphBoundary {
+  Vec3 position;
+  std::uint32_t tags;
+};
+TriMesh graph_surface(std::string_view name, const std::vector<GraphBoundary>& boundary,
+                      const std::vector<Vec2>& interior, const std::function<double(const Vec2&)>& height,
+                      Tissue tissue, double thickness) {
+  TriMesh mesh;
+  mesh.name = std::string(name);
+  mesh.kind = BodyKind::kLeaflet;
+  std::vector<Vec2> pts;
+  for (const auto& b : boundary) {
+    mesh.add_node(b.position, b.tags);
+    pts.emplace_back(b.position.x(), b.position.y());
+  }
+  for (const auto& p : interior) {
+    mesh.add_node(Vec3(p.x(), p.y(), height(p)));
+    pts.push_back(p);
+  }
+  for (const auto& t : detail::delaunay_2d(pts)) mesh.add_triangle(t[0], t[2], t[1], tissue, thickness);
+  return mesh;
+}
+
+}  // namespace
+
+const TriMesh& LeftHeart::body(std::string_view name) const {
+  for (const auto& b : bodies)
+    if (b.name == name) return b;
+  throw std::out_of_range("no body named '" + std::string(name) + "'");
+}
+TriMesh& LeftHeart::body(std::string_view name) {
+  return const_cast<TriMesh&>(static_cast<const LeftHeart*>(this)->body(name));
+}
+std::vector<const TriMesh*> LeftHeart::body_pointers() const {
+  std::vector<const TriMesh*> out;
+  for (const auto& b : bodies) out.push_back(&b);
+  return out;
+}
+
+LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid) {
+  // The cross-field rules first (parse_scenario has run them already for a parsed scenario;
+  // a caller passing a hand-made Geometry gets the same messages).
+  {
+    std::vector<std::string> errors;
+    config::check_geometry_rules(g, errors);
+    if (!errors.empty()) {
+      std::string msg = "invalid geometry:";
+      for (const auto& e : errors) msg += "\n  " + e;
+      throw InputError(msg);
+    }
+  }
+  LeftHeart heart;
+  HeartLayout& lay = heart.layout;
+  const double h = g.target_edge_mm;
+  const double h_ring = std::min(h, 0.8 * kRimMm);
+  lay.ring_edge_mm = h_ring;
+
+  // ---- LV: truncated prolate ellipsoid -----------------------------------------------------
+  // Semi-axes a (equatorial, = lv_short_axis/2) and c (polar); the plane cuts the ellipsoid at
+  // u = (z - z0)/c = -t, the apex is at depth L = c (1 + t). The cavity closed by the plane
+  // holds pi a^2 L f(t); t solves f(t) = V / (pi a^2 L). t < 0: the equator lies above the
+  // plane (the LV narrows from its base ring); t > 0: the LV bulges below its base ring.
+  const double a = 0.5 * g.lv_short_axis_mm, L = g.lv_long_axis_mm;
+  const double v_lv = g.lv_volume_ml * 1e3;
+  const double q = v_lv / (M_PI * a * a * L);
+  require(q <= 0.75, "geometry.lv_volume_ml = " + num(g.lv_volume_ml) +
+                         " ml exceeds the largest cavity of a truncated prolate ellipsoid with "
+                         "lv_short_axis_mm = " + num(g.lv_short_axis_mm) + " and lv_long_axis_mm = " +
+                         num(L) + " (" + num(0.75 * M_PI * a * a * L * 1e-3) + " ml)");
+  const double t = solve_increasing(truncated_fraction, q, -0.999, 0.5);
+  const double c = L / (1 + t), z0 = t * c;
+  lay.lv_truncation = t;
+  lay.lv_polar_semi_axis_mm = c;
+  const double base_radius = a * std::sqrt(1 - t * t);
+  require(2 * base_radius >= g.mitral_diameter_mm + g.aortic_diameter_mm + 2 * kRimMm + kMinCurtainMm,
+          "geometry.mitral_diameter_mm + aortic_diameter_mm = " +
+              num(g.mitral_diameter_mm + g.aortic_diameter_mm) + " mm (plus 2 x " + num(kRimMm) +
+              " mm rims and a " + num(kMinCurtainMm) + " mm curtain) do not fit in the LV base ring of "
+              "diameter " + num(2 * base_radius) + " mm set by lv_short_axis_mm, lv_long_axis_mm and "
+              "lv_volume_ml");
+
+  TriMesh lv;
+  lv.name = std::string(kLvBody);
+  lv.kind = BodyKind::kChamber;
+  const int n_base = ring_count(base_radius, h_ring, 12);
+  {
+    auto curve = [&](double beta) { return Vec2(z0 + c * std::sin(beta), a * std::cos(beta)); };
+    const auto st = meridian_stations(curve, std::asin(-t), M_PI / 2, 0.866 * h, 4);
+    const int nrings = static_cast<int>(st.size()) - 1;  // last station is the apex pole
+    int apex_ring = 1, base_ring = 1;
+    for (int k = 1; k < nrings; ++k) {
+      const double depth = curve(st[k]).x();
+      if (std::abs(depth - 0.85 * L) < std::abs(curve(st[apex_ring]).x() - 0.85 * L)) apex_ring = k;
+      if (std::abs(depth - 0.15 * L) < std::abs(curve(st[base_ring]).x() - 0.15 * L)) base_ring = k;
+    }
+    std::vector<Tri> tris;
+    Ring prev;
+    for (int k = 0; k < nrings; ++k) {
+      const Vec2 zr = curve(st[k]);
+      const double r = k == 0 ? base_radius : zr.y();
+      const int n = k == 0 ? n_base : ring_count(r, h);
+      std::uint32_t tags = k == 0 ? kAnchor : kRegionNone;
+      if (k == apex_ring) tags |= kLvApexRing;
+      if (k == base_ring) tags |= kLvBaseRing;
+      Ring ring = add_ring(lv, n, Vec3(0, 0, k == 0 ? 0.0 : zr.x()), Vec3::UnitX(), Vec3::UnitY(),
+                           [r](double) { return r; }, tags);
+      if (k) detail::stitch_rings(prev, ring, tris);
+      prev = std::move(ring);
+    }
+    const auto apex = lv.add_node(Vec3(0, 0, L), kLvApex);
+    detail::close_with_pole(prev, apex, tris);
+    add_triangles(lv, tris, Tissue::kLvMyocardium, g.lv_wall_mm);
+  }
+  if (cavity_volume_ml(lv, 0) < 0) lv.flip_orientation();
+  // Discrete volume correction (ours): scale x, y about the axis so that the polyhedron
+  // closed by the plane holds exactly lv_volume_ml (a correction of order (h / a)^2).
+  lay.lv_xy_scale = std::sqrt(g.lv_volume_ml / cavity_volume_ml(lv, 0));
+  for (auto& p : lv.position_mm) p.head<2>() *= lay.lv_xy_scale;
+  lay.lv_base_radius_mm = base_radius * lay.lv_xy_scale;
+  double lv_max_radius = 0;
+  for (const auto& p : lv.position_mm) lv_max_radius = std::max(lv_max_radius, p.head<2>().norm());
+  // His bundle (ours): septum just below the aortic valve, azimuth of the aortic orifice (+x),
+  // at 12 % of the long axis below the plane.
+  {
+    const double depth = 0.12 * L;
+    const double u = (depth - z0) / c;
+    tag_patch(lv, Vec3(a * std::sqrt(1 - u * u) * lay.lv_xy_scale, 0, depth), kPatchRadiusMm, kHisBundle);
+  }
+  // LV fibres: helix at lv_fibre_angle_deg, counter-clockwise seen from the apex (about +z),
+  // rising from apex to base: f = cos(alpha) e_circ + sin(alpha) e_apex->base.
+  {
+    const double alpha = g.lv_fibre_angle_deg * M_PI / 180;
+    for (std::size_t tr = 0; tr < lv.triangle_count(); ++tr) {
+      const Vec3 cen = lv.centroid(tr), n = lv.unit_normal(tr);
+      const Vec3 radial(cen.x(), cen.y(), 0);
+      const Vec3 circ = tangent_in_triangle(lv, tr, Vec3::UnitZ().cross(radial), Vec3::UnitY());
+      Vec3 up = n.cross(circ);  // inward normal x circumferential = towards the base
+      if (up.z() > 0) up = -up;
+      lv.fibre[tr] = (std::cos(alpha) * circ + std::sin(alpha) * up).normalized();
+    }
+  }
+
+  // ---- valvular plane ----------------------------------------------------------------------
+  const double r_m = 0.5 * g.mitral_diameter_mm, r_a = 0.5 * g.aortic_diameter_mm;
+  const double r_in = lay.lv_base_radius_mm * std::cos(M_PI / n_base);
+  const double x_m = -r_in + kRimMm + r_m, x_a = r_in - kRimMm - r_a;
+  const Vec3 M(x_m, 0, 0), A(x_a, 0, 0);
+  const int n_m = 4 * std::max(4, static_cast<int>(std::lround(2 * M_PI * r_m / h_ring / 4)));
+  const int n_a = 6 * std::max(2, static_cast<int>(std::lround(2 * M_PI * r_a / h_ring / 6)));
+  TriMesh plane;
+  plane.name = std::string(kValvularPlaneBody);
+  plane.kind = BodyKind::kRigid;
+  Ring mitral_ring, aortic_ring;
+  {
+    std::vector<Vec2> pts;
+    std::vector<int> group;
+    for (int i = 0; i < n_base; ++i) {
+      const Vec3& p = lv.position_mm[i];  // LV ring 0 = nodes 0 .. n_base-1
+      plane.add_node(p, kRegionNone);
+      pts.emplace_back(p.x(), p.y());
+      group.push_back(0);
+    }
+    mitral_ring = add_ring(plane, n_m, M, Vec3::UnitX(), Vec3::UnitY(), [&](double) { return r_m; },
+                           kMitralAnnulus);
+    aortic_ring = add_ring(plane, n_a, A, Vec3::UnitX(), Vec3::UnitY(), [&](double) { return r_a; },
+                           kAorticAnnulus);
+    for (std::size_t i = n_base; i < plane.node_count(); ++i) {
+      pts.emplace_back(plane.position_mm[i].x(), plane.position_mm[i].y());
+      group.push_back(i < static_cast<std::size_t>(n_base + n_m) ? 1 : 2);
+    }
+    const double margin = 0.6 * h_ring;
+    for (const Vec2& p : detail::hex_lattice(Vec2(-r_in, -r_in), Vec2(r_in, r_in), h_ring)) {
+      if (p.norm() > r_in - margin) continue;
+      if ((p - M.head<2>()).norm() < r_m + margin || (p - A.head<2>()).norm() < r_a + margin) continue;
+      plane.add_node(Vec3(p.x(), p.y(), 0));
+      pts.push_back(p);
+      group.push_back(3);
+    }
+    for (const auto& tr : detail::delaunay_2d(pts)) {
+      const int g0 = group[tr[0]];
+      if ((g0 == 1 || g0 == 2) && group[tr[1]] == g0 && group[tr[2]] == g0) continue;  // a hole
+      plane.add_triangle(tr[0], tr[1], tr[2], Tissue::kValvularPlane, g.lv_wall_mm, Vec3::UnitX());
+    }
+    const EdgeTopology topo(plane);
+    std::size_t boundary = 0;
+    for (std::size_t e = 0; e < topo.edge_count(); ++e) boundary += topo.face_count_of(e) == 1;
+    if (boundary != static_cast<std::size_t>(n_base + n_m + n_a))
+      throw std::logic_error("valvular plane: orifice rings not recovered by the triangulation");
+  }
+  heart.plane = {0, Vec3::Zero(), lay.lv_base_radius_mm, M, r_m, A, r_a};
+
+  // ---- LA: sheared truncated spheroid on the mitral ring -----------------------------------
+  // Slices at height y above the plane are circles of radius r(y) (a spheroid of equatorial
+  // radius R and polar semi-axis c_la = 0.85 R cut so that r(0) = r_m), centred at
+  // x_m - S(y): S(y) = r(y) - r_m up to the equator (the anterior wall stays vertical above the
+  // anterior annulus, away from the aortic root), constant above (ours). Shearing slices keeps
+  // the volume: V = pi R^2 c (2/3 + tau - tau^3/3), tau = sqrt(1 - r_m^2 / R^2).
+  const double v_la = g.la_volume_ml * 1e3;
+  auto la_volume = [&](double R) {
+    const double cc = kLaAspect * R, tau = std::sqrt(std::max(0.0, 1 - r_m * r_m / (R * R)));
+    return M_PI * R * R * cc * (2.0 / 3.0 + tau - tau * tau * tau / 3.0);
+  };
+  require(v_la > la_volume(r_m * 1.0001),
+          "geometry.la_volume_ml = " + num(g.la_volume_ml) + " ml is too small for an atrium on a mitral "
+          "orifice of mitral_diameter_mm = " + num(g.mitral_diameter_mm) + " (minimum " +
+              num(la_volume(r_m) * 1e-3) + " ml)");
+  const double R_la = solve_increasing(la_volume, v_la, r_m * 1.0001, 500);
+  const double c_la = kLaAspect * R_la;
+  const double tau = std::sqrt(1 - r_m * r_m / (R_la * R_la));
+  const double y_c = tau * c_la;
+  lay.la_equatorial_radius_mm = R_la;
+  lay.la_polar_semi_axis_mm = c_la;
+  auto la_r = [&](double y) {
+    const double u = std::clamp((y - y_c) / c_la, -1.0, 1.0);
+    return R_la * std::sqrt(1 - u * u);
+  };
+  auto la_shift = [&](double y) { return y <= y_c ? la_r(y) - r_m : R_la - r_m; };
+  TriMesh la;
+  la.name = std::string(kLaBody);
+  la.kind = BodyKind::kChamber;
+  {
+    auto curve = [&](double beta) { return Vec2(y_c + c_la * std::sin(beta), R_la * std::cos(beta)); };
+    // Rings are spaced along the posterior meridian, the longest one of the sheared stack.
+    auto posterior = [&](double beta) {
+      const double y = y_c + c_la * std::sin(beta);
+      return Vec2(y, la_shift(y) + R_la * std::cos(beta));
+    };
+    const auto st = meridian_stations(posterior, std::asin(-tau), M_PI / 2, 0.866 * h, 4);
+    const int nrings = static_cast<int>(st.size()) - 1;
+    std::vector<Tri> tris;
+    Ring prev = copy_ring(la, plane, mitral_ring, kAnchor | kMitralAnnulus);
+    for (int k = 1; k < nrings; ++k) {
+      const Vec2 yr = curve(st[k]);
+      const double y = yr.x(), r = yr.y();
+      Ring ring = add_ring(la, ring_count(r, h), Vec3(x_m - la_shift(y), 0, -y), Vec3::UnitX(),
+                           Vec3::UnitY(), [r](double) { return r; }, kRegionNone);
+      detail::stitch_rings(prev, ring, tris);
+      prev = std::move(ring);
+    }
+    const double y_top = y_c + c_la;
+    const auto pole = la.add_node(Vec3(x_m - la_shift(y_top), 0, -y_top));
+    detail::close_with_pole(prev, pole, tris);
+    add_triangles(la, tris, Tissue::kLaMyocardium, g.la_wall_mm);
+    lay.la_height_mm = y_top;
+  }
+  if (cavity_volume_ml(la, 0) < 0) la.flip_orientation();
+  // Discrete volume correction (ours): scale heights (the mitral ring stays in the plane).
+  lay.la_height_scale = g.la_volume_ml / cavity_volume_ml(la, 0);
+  for (auto& p : la.position_mm) p.z() *= lay.la_height_scale;
+  lay.la_height_mm *= lay.la_height_scale;
+  auto la_point = [&](double y, double th) {
+    const double r = la_r(y);
+    return Vec3(x_m - la_shift(y) + r * std::cos(th), r * std::sin(th), -y * lay.la_height_scale);
+  };
+  // LA fibres (ours: along the vertical axis = the meridians of the slice stack), pointing up.
+  for (std::size_t tr = 0; tr < la.triangle_count(); ++tr) {
+    const Vec3 cen = la.centroid(tr);
+    const double y = -cen.z() / lay.la_height_scale;
+    const double u = std::clamp((y - y_c) / c_la, -1.0, 1.0), s = std::sqrt(1 - u * u);
+    const double th = std::atan2(cen.y(), cen.x() - (x_m - la_shift(y)));
+    const double dr = -R_la * u / c_la;                    // r'(y) * sqrt(1 - u^2)
+    const double ds = y <= y_c ? dr : 0.0;                 // S'(y) * sqrt(1 - u^2)
+    const Vec3 meridian(-ds + dr * std::cos(th), dr * std::sin(th), -lay.la_height_scale * s);
+    Vec3 f = tangent_in_triangle(la, tr, meridian, -Vec3::UnitZ());
+    la.fibre[tr] = f;
+  }
+  // Pulmonary-vein ostia (ours): 40 degrees either side of the posterior direction (-x), at
+  // the equator +- 0.35 c_la; left veins on +y. Cap triangles become vein_ostium tissue.
+  {
+    const double r_pv = 0.5 * g.pulmonary_vein_diameter_mm;
+    const std::pair<Region, Vec3> ostia[4] = {
+        {kPvOstiumLeftSuperior, la_point(y_c + 0.35 * c_la, M_PI - 0.7)},
+        {kPvOstiumLeftInferior, la_point(y_c - 0.35 * c_la, M_PI - 0.7)},
+        {kPvOstiumRightSuperior, la_point(y_c + 0.35 * c_la, M_PI + 0.7)},
+        {kPvOstiumRightInferior, la_point(y_c - 0.35 * c_la, M_PI + 0.7)}};
+    for (const auto& [bit, centre] : ostia)
+      for (std::size_t tr = 0; tr < la.triangle_count(); ++tr)
+        if ((la.centroid(tr) - centre).norm() <= r_pv) {
+          la.tissue[tr] = Tissue::kVeinOstium;
+          for (auto v : la.tri[tr]) la.region[v] |= bit;
+        }
+  }
+  // Bachmann bundle (ours): anterior LA roof, at 75 % of the LA height on the anterior wall.
+  tag_patch(la, la_point(0.75 * (y_c + c_la), 0.0), kPatchRadiusMm, kBachmannBundle);
+
+  // ---- mitral leaflets (closed) -----------------------------------------------------------
+  // Each leaflet is a height field over half of the orifice: the annulus arc (ring nodes) at
+  // the plane, the free edge a straight coaptation line parallel to y at x = +-r_m sin(pi/n_m),
+  // dipping to depth z_c (parabolic profile, shallow at the commissures) so that the leaflet's mid-section from annulus to
+  // free edge is a straight segment of length mitral_leaflet_length_mm. The two free edges are
+  // one ring edge apart (ours: the contact model closes that gap).
+  const double x_f = r_m * std::sin(M_PI / n_m), w_half = r_m * std::cos(M_PI / n_m);
+  require(g.mitral_leaflet_length_mm > r_m - x_f + 0.5,
+          "geometry.mitral_leaflet_length_mm = " + num(g.mitral_leaflet_length_mm) +
+              " is too short to close the mitral orifice: it must exceed mitral_diameter_mm / 2 = " + num(r_m));
+  const double z_c = std::sqrt(std::pow(g.mitral_leaflet_length_mm, 2) - std::pow(r_m - x_f, 2));
+  lay.mitral_coaptation_depth_mm = z_c;
+  lay.leaflet_gap_mm = 2 * x_f;
+  const double h_leaf = h_ring * std::max(0.6, (r_m - x_f) / g.mitral_leaflet_length_mm);
+  for (int side = 0; side < 2; ++side) {
+    const double sgn = side == 0 ? 1.0 : -1.0;  // anterior (+x, towards the aortic valve) / posterior
+    std::vector<GraphBoundary> boundary;
+    for (std::size_t i = 0; i < mitral_ring.node.size(); ++i)
+      if (sgn * std::cos(mitral_ring.angle[i]) > 0)
+        boundary.push_back({plane.position_mm[mitral_ring.node[i]], kAnchor | kMitralAnnulus});
+    auto z_free = [&](double s) { return z_c * std::max(0.0, 1 - s * s); };
+    // Free-edge nodes equally spaced along the 3D edge (it is steep near the commissures).
+    const auto fe = meridian_stations([&](double s) { return Vec2(s * w_half, z_free(s)); }, 1, -1, h_leaf, 2);
+    for (std::size_t j = 1; j + 1 < fe.size(); ++j) {
+      const double s = fe[j];
+      const double bulge = 1e-4 * w_half * (1 - s * s);  // keeps the domain strictly convex
+      boundary.push_back({Vec3(x_m + sgn * (x_f - bulge), s * w_half, z_free(s)), kFreeEdge});
+    }
+    std::vector<Vec2> interior;
+    const double margin = 0.6 * h_leaf;
+    for (const Vec2& p : detail::hex_lattice(Vec2(x_m - r_m, -r_m), Vec2(x_m + r_m, r_m), h_leaf)) {
+      const Vec2 rel = p - M.head<2>();
+      if (rel.norm() > r_m - margin || sgn * rel.x() < x_f + margin) continue;
+      interior.push_back(p);
+    }
+    auto height = [&](const Vec2& p) {
+      const Vec2 rel = p - M.head<2>();
+      const double d_arc = std::max(0.0, r_m - rel.norm()), d_chord = std::max(0.0, sgn * rel.x() - x_f);
+      return d_arc / (d_arc + d_chord + 1e-300) * z_free(rel.y() / w_half);
+    };
+    TriMesh leaf = graph_surface(side == 0 ? kMitralAnteriorBody : kMitralPosteriorBody, boundary, interior,
+                                 height, Tissue::kMitralLeaflet, g.mitral_leaflet_thickness_mm);
+    // Fibres along the free edge (the coaptation line, y).
+    for (std::size_t tr = 0; tr < leaf.triangle_count(); ++tr)
+      leaf.fibre[tr] = tangent_in_triangle(leaf, tr, Vec3::UnitY(), Vec3::UnitX());
+    heart.bodies.push_back(std::move(leaf));
+  }
+  // Leaflets must stay inside the LV cavity (checked again on the mesh below).
+  {
+    const double depth_limit = L - 2 * kMinBodyGapMm;
+    require(z_c < depth_limit, "geometry.mitral_leaflet_length_mm = " + num(g.mitral_leaflet_length_mm) +
+                                   " reaches " + num(z_c) + " mm below the valvular plane, longer than the LV "
+                                   "(lv_long_axis_mm = " + num(L) + ")");
+  }
+
+  // ---- aortic cusps (closed) ----------------------------------------------------------------
+  // Cusp k spans the sector around phi_k = 120 k degrees between commissures at phi_k +- 60
+  // (a commissure faces the LA, -x). Its free edges run parallel to the commissure radii, one
+  // ring edge from the neighbouring cusp's, and meet at a tip near the centre, raised to the
+  // coaptation height h_c = 0.5 r_a; the belly is a height field between the annulus and the
+  // free edges (ours).
+  const double h_c = kCuspHeightPerRadius * r_a;
+  lay.cusp_coaptation_height_mm = h_c;
+  {
+    const double d_tip = r_a * std::sin(M_PI / n_a) / std::sin(M_PI / 3);
+    const double h_cusp = h_ring * 0.8;
+    for (int k = 0; k < 3; ++k) {
+      const double phi = 2 * M_PI * k / 3;
+      const Vec2 dir(std::cos(phi), std::sin(phi));
+      const Vec2 tip = A.head<2>() + d_tip * dir;
+      std::vector<GraphBoundary> boundary;
+      Vec2 e1 = Vec2::Zero(), e2 = Vec2::Zero();
+      for (std::size_t i = 0; i < aortic_ring.node.size(); ++i) {
+        const double rel = std::remainder(aortic_ring.angle[i] - phi, 2 * M_PI);
+        if (std::abs(rel) >= M_PI / 3) continue;
+        const Vec3& p = plane.position_mm[aortic_ring.node[i]];
+        boundary.push_back({p, kAnchor | kAorticAnnulus});
+        if (std::abs(rel + M_PI / 3 - M_PI / n_a) < 1e-9) e1 = p.head<2>();
+        if (std::abs(rel - M_PI / 3 + M_PI / n_a) < 1e-9) e2 = p.head<2>();
+      }
+      const double rho_tip = d_tip / r_a;
+      auto free_height = [&](const Vec2& p) {
+        return h_c * std::max(0.0, 1 - (p - A.head<2>()).norm() / r_a) / (1 - rho_tip);
+      };
+      const Vec2 inside = A.head<2>() + 0.5 * r_a * dir;
+      for (const auto& [from, to] : {std::pair{e1, tip}, std::pair{tip, e2}}) {
+        const double len = (to - from).norm();
+        Vec2 out(-(to - from).y(), (to - from).x());
+        out.normalize();
+        if (out.dot(inside - from) > 0) out = -out;
+        const int nseg = std::max(2, static_cast<int>(std::ceil(len / h_cusp)));
+        for (int j = 1; j <= nseg; ++j) {
+          if (j == nseg && to != tip) break;  // the end node is an annulus node
+          const double s = static_cast<double>(j) / nseg;
+          const Vec2 p = from + s * (to - from) + 4e-4 * len * s * (1 - s) * out;
+          boundary.push_back({Vec3(p.x(), p.y(), -free_height(p)), kFreeEdge});
+        }
+      }
+      auto d_free = [&](const Vec2& p) {
+        return std::min(distance_to_segment(p, e1, tip), distance_to_segment(p, tip, e2));
+      };
+      auto side_ok = [&](const Vec2& p, const Vec2& from, const Vec2& to, double margin) {
+        Vec2 nrm(-(to - from).y(), (to - from).x());
+        nrm.normalize();
+        if (nrm.dot(inside - from) < 0) nrm = -nrm;
+        return nrm.dot(p - from) >= margin;
+      };
+      std::vector<Vec2> interior;
+      const double margin = 0.6 * h_cusp;
+      for (const Vec2& p : detail::hex_lattice(A.head<2>() - Vec2(r_a, r_a), A.head<2>() + Vec2(r_a, r_a), h_cusp)) {
+        if ((p - A.head<2>()).norm() > r_a - margin) continue;
+        if (!side_ok(p, e1, tip, margin) || !side_ok(p, tip, e2, margin)) continue;
+        interior.push_back(p);
+      }
+      auto height = [&](const Vec2& p) {
+        const double d_arc = std::max(0.0, r_a - (p - A.head<2>()).norm()), df = d_free(p);
+        return -d_arc / (d_arc + df + 1e-300) * free_height(p);
+      };
+      TriMesh cusp = graph_surface(kAorticCuspBodies[k], boundary, interior, height, Tissue::kAorticLeaflet,
+                                   g.aortic_leaflet_thickness_mm);
+      for (std::size_t tr = 0; tr < cusp.triangle_count(); ++tr) {
+        const Vec3 rel = cusp.centroid(tr) - A;
+        cusp.fibre[tr] = tangent_in_triangle(cusp, tr, Vec3::UnitZ().cross(Vec3(rel.x(), rel.y(), 0)),
+                                             Vec3::UnitX());
+      }
+      heart.bodies.push_back(std::move(cusp));
+    }
+  }
+
+  // ---- aorta: root with three sinuses, 180-degree arch, descending aorta ---------------------
+  const double R_root = 0.5 * g.aortic_root_diameter_mm, r_arch = 0.5 * g.aortic_arch_diameter_mm;
+  const double r_desc = 0.5 * g.aortic_descending_diameter_mm;
+  require(R_root > r_arch, "geometry.aortic_root_diameter_mm = " + num(g.aortic_root_diameter_mm) +
+                               " must exceed aortic_arch_diameter_mm = " + num(g.aortic_arch_diameter_mm) +
+                               " (the sinuses of Valsalva bulge beyond the ascending aorta)");
+  const double y_stj = kRootHeightPerDiameter * g.aortic_root_diameter_mm;
+  lay.root_height_mm = y_stj;
+  auto root_base = [&](double s) { return r_a + (r_arch - r_a) * smoothstep(s / y_stj); };
+  auto sinus_peak = [&](double amp) {
+    double m = 0;
+    for (int i = 0; i <= 400; ++i) {
+      const double s = y_stj * i / 400;
+      m = std::max(m, root_base(s) + amp * std::sin(M_PI * s / y_stj));
+    }
+    return m;
+  };
+  const double amp = solve_increasing(sinus_peak, R_root, 0, 2 * R_root);
+  lay.sinus_amplitude_mm = amp;
+  auto lobe = [](double th) {
+    return kSinusCommissureShare + (1 - kSinusCommissureShare) * 0.5 * (1 + std::cos(3 * th));
+  };
+  // Root vs LA: the LA's anterior wall is the vertical plane x = x_m + r_m below its equator.
+  {
+    double root_min_x = 1e300;
+    for (int i = 0; i <= 60; ++i)
+      for (int j = 0; j <= 72; ++j) {
+        const double s = y_stj * i / 60, th = 2 * M_PI * j / 72;
+        const double r = root_base(s) + lobe(th) * amp * std::sin(M_PI * s / y_stj);
+        root_min_x = std::min(root_min_x, x_a + r * std::cos(th));
+      }
+    require(root_min_x - (x_m + r_m) >= kMinBodyGapMm,
+            "geometry.aortic_root_diameter_mm = " + num(g.aortic_root_diameter_mm) +
+                " makes the aortic root reach the left atrium (gap " + num(root_min_x - (x_m + r_m)) +
+                " mm < " + num(kMinBodyGapMm) + " mm); reduce it or aortic_diameter_mm / mitral_diameter_mm, "
+                "or enlarge lv_short_axis_mm");
+  }
+  // Descending aorta placement (ours): beside the heart on +y, in the vertical plane x = x_a.
+  const double y_d = std::max({std::sqrt(std::max(0.0, std::pow(lv_max_radius + r_arch + kLayoutGapMm, 2) - x_a * x_a)),
+                               R_root + r_arch + kLayoutGapMm, R_la + r_arch + kLayoutGapMm,
+                               2 * kArchRadiusPerTubeRadius * r_arch});
+  const double R_arch = 0.5 * y_d;
+  lay.arch_radius_mm = R_arch;
+  lay.descending_offset_mm = y_d;
+  const Vec3 up = -Vec3::UnitZ(), side = Vec3::UnitY();
+  const double s_arch0 = y_stj, s_arch1 = y_stj + M_PI * R_arch;
+  const double s_end = s_arch1 + y_stj + L;  // the descending aorta ends level with the apex
+  auto centre = [&](double s) -> Vec3 {
+    if (s <= s_arch0) return A + s * up;
+    if (s <= s_arch1) {
+      const double ph = (s - s_arch0) / R_arch;
+      return A + y_stj * up + R_arch * (1 - std::cos(ph)) * side + R_arch * std::sin(ph) * up;
+    }
+    return A + y_stj * up + 2 * R_arch * side - (s - s_arch1) * up;
+  };
+  auto tangent = [&](double s) -> Vec3 {
+    if (s <= s_arch0) return up;
+    if (s <= s_arch1) {
+      const double ph = (s - s_arch0) / R_arch;
+      return (std::sin(ph) * side + std::cos(ph) * up).normalized();
+    }
+    return -up;
+  };
+  auto mean_radius = [&](double s) {
+    if (s <= s_arch0) return root_base(s) + (kSinusCommissureShare + 0.5 * (1 - kSinusCommissureShare)) * amp *
+                                                std::sin(M_PI * s / y_stj);
+    if (s <= s_arch1) return r_arch;
+    return r_arch + (r_desc - r_arch) * smoothstep((s - s_arch1) / (kDescendingTaperPerDiameter * 2 * r_desc));
+  };
+  auto radius = [&](double s, double th) {
+    if (s <= s_arch0) return root_base(s) + lobe(th) * amp * std::sin(M_PI * s / y_stj);
+    return mean_radius(s);
+  };
+  TriMesh aorta;
+  aorta.name = std::string(kAortaBody);
+  aorta.kind = BodyKind::kVessel;
+  const double s_outflow = s_end - kOutflowLengthPerDiameter * 2 * r_desc;
+  {
+    // Rotation-minimising frame by parallel transport on a fine centreline sampling.
+    const int dense = std::max(400, static_cast<int>(s_end / 0.1));
+    std::vector<Vec3> e1s(dense + 1);
+    Vec3 e1 = Vec3::UnitX();
+    for (int i = 0; i <= dense; ++i) {
+      const Vec3 tt = tangent(s_end * i / dense);
+      e1 = (e1 - e1.dot(tt) * tt).normalized();
+      e1s[i] = e1;
+    }
+    auto frame = [&](double s, Vec3& f1, Vec3& f2) {
+      const Vec3 tt = tangent(s);
+      const int i = std::clamp(static_cast<int>(std::lround(s / s_end * dense)), 0, dense);
+      f1 = (e1s[i] - e1s[i].dot(tt) * tt).normalized();
+      f2 = f1.cross(tt);  // (x, y) at the root, where the tangent is -z
+    };
+    auto curve = [&](double s) { return Vec2(s, mean_radius(s)); };
+    const auto st = meridian_stations(curve, 0, s_end, 0.866 * h, 8);
+    std::vector<Tri> tris;
+    std::vector<int> tri_ring;
+    std::vector<double> ring_s;
+    Ring prev = copy_ring(aorta, plane, aortic_ring, kAnchor | kAorticAnnulus);
+    ring_s.push_back(0);
+    for (std::size_t k = 1; k < st.size(); ++k) {
+      const double s = st[k];
+      Vec3 f1, f2;
+      frame(s, f1, f2);
+      const std::uint32_t tags = s >= s_outflow - 1e-9 ? kOutflow : kRegionNone;
+      Ring ring = add_ring(aorta, ring_count(mean_radius(s), h), centre(s), f1, f2,
+                           [&](double th) { return radius(s, th); }, tags);
+      const std::size_t before = tris.size();
+      detail::stitch_rings(prev, ring, tris);
+      tri_ring.insert(tri_ring.end(), tris.size() - before, static_cast<int>(k - 1));
+      ring_s.push_back(s);
+      prev = std::move(ring);
+    }
+    add_triangles(aorta, tris, Tissue::kAorticWall, g.aorta_wall_mm);
+    // Orientation: normals into the lumen.
+    {
+      const std::size_t tr = aorta.triangle_count() / 2;
+      const double s = 0.5 * (ring_s[tri_ring[tr]] + ring_s[tri_ring[tr] + 1]);
+      if (aorta.unit_normal(tr).dot(centre(s) - aorta.centroid(tr)) < 0) aorta.flip_orientation();
+    }
+    // Fibres: circumferential about the local centreline.
+    for (std::size_t tr = 0; tr < aorta.triangle_count(); ++tr) {
+      const double s = 0.5 * (ring_s[tri_ring[tr]] + ring_s[tri_ring[tr] + 1]);
+      const Vec3 circ = tangent(s).cross(aorta.centroid(tr) - centre(s));
+      aorta.fibre[tr] = tangent_in_triangle(aorta, tr, circ, Vec3::UnitX());
+    }
+  }
+  heart.outflow = {centre(s_outflow), centre(s_end), r_desc};
+
+  // ---- assemble in body order, centre in the fluid box ------------------------------------
+  std::vector<TriMesh> leaflets = std::move(heart.bodies);
+  heart.bodies.clear();
+  heart.bodies.push_back(std::move(plane));
+  heart.bodies.push_back(std::move(lv));
+  heart.bodies.push_back(std::move(la));
+  for (auto& b : leaflets) heart.bodies.push_back(std::move(b));
+  heart.bodies.push_back(std::move(aorta));
+
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  for (const auto& b : heart.bodies)
+    for (const auto& p : b.position_mm) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  const Vec3 box(fluid.box_x_mm, fluid.box_y_mm, fluid.box_z_mm);
+  const Vec3 offset = 0.5 * box - 0.5 * (lo + hi);
+  lay.box_clearance_mm = 0.5 * (box - (hi - lo));
+  {
+    const Vec3 need = (hi - lo).array() + 2 * kMinBoxClearanceMm;
+    const char* axis[3] = {"x", "y", "z"};
+    for (int d = 0; d < 3; ++d)
+      require(lay.box_clearance_mm[d] >= kMinBoxClearanceMm,
+              std::string("the heart spans ") + num(hi[d] - lo[d]) + " mm in " + axis[d] + " but fluid.box_" +
+                  axis[d] + "_mm = " + num(box[d]) + " (need >= " + num(need[d]) +
+                  " for a " + num(kMinBoxClearanceMm) + " mm clearance); enlarge the box or reduce "
+                  "geometry.lv_long_axis_mm / lv_short_axis_mm / aortic_*_diameter_mm / la_volume_ml");
+  }
+  for (auto& b : heart.bodies)
+    for (auto& p : b.position_mm) p += offset;
+  heart.plane.z_mm += offset.z();
+  heart.plane.centre_mm += offset;
+  heart.plane.mitral_centre_mm += offset;
+  heart.plane.aortic_centre_mm += offset;
+  heart.outflow.start_mm += offset;
+  heart.outflow.end_mm += offset;
+
+  // ---- verify -------------------------------------------------------------------------------
+  std::vector<QualityIssue> issues;
+  CheckOptions options;
+  options.plane_z_mm = heart.plane.z_mm;
+  options.plane_tolerance_mm = 1e-9 * (1 + std::abs(heart.plane.z_mm));
+  options.degenerate_min_angle_deg = 0.1;
+  for (const auto& b : heart.bodies) {
+    auto bi = check_body(b, options);
+    issues.insert(issues.end(), bi.begin(), bi.end());
+  }
+  auto xi = check_intersections(heart.body_pointers());
+  issues.insert(issues.end(), xi.begin(), xi.end());
+  // LV vs LA and aorta: they lie on opposite sides of the rigid plane, which separates them
+  // where they meet it; their gap is measured outside a band of kPlaneBandMm around it (ours).
+  struct Pair {
+    std::string_view p, q;
+    double band;
+  };
+  const Pair unattached[] = {{kLvBody, kLaBody, kPlaneBandMm},
+                             {kLvBody, kAortaBody, kPlaneBandMm},
+                             {kLaBody, kAortaBody, -1}};
+  for (const auto& [p, q, band] : unattached) {
+    const double gap = min_gap_mm(heart.body(p), heart.body(q), kMinBodyGapMm, heart.plane.z_mm, band);
+    if (gap < kMinBodyGapMm)
+      issues.push_back({"clearance", std::string(p),
+                        "bodies '" + std::string(p) + "' and '" + std::string(q) + "' come within " + num(gap) +
+                            " mm of each other (minimum " + num(kMinBodyGapMm) + " mm)"});
+  }
+  throw_if_issues(issues, "the geometry variant does not give a valid heart");
+  return heart;
+}
+
+}  // namespace systole::geometry

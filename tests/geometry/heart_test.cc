@@ -1,0 +1,302 @@
+// Procedural left heart: volumes at several resolutions, response to parameters, box,
+// intersections, orientation, regions, fibres measured back on the mesh.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "solver/config/scenario.h"
+#include "solver/core/errors.h"
+#include "solver/geometry/diagnostics.h"
+#include "solver/geometry/left_heart.h"
+#include "solver/geometry/quality.h"
+#include "solver/geometry/topology.h"
+
+namespace systole::geometry {
+namespace {
+
+config::Scenario defaults() { return config::default_scenario(); }
+
+LeftHeart build(const config::Scenario& s) { return build_left_heart(s.geometry, s.fluid); }
+
+class HeartAtResolution : public ::testing::TestWithParam<double> {};
+
+TEST_P(HeartAtResolution, VolumesBoxOrientationAndChecks) {
+  auto s = defaults();
+  s.geometry.target_edge_mm = GetParam();
+  const LeftHeart heart = build(s);
+  const double zp = heart.plane.z_mm;
+  const double v_lv = cavity_volume_ml(heart.body(kLvBody), zp);
+  const double v_la = cavity_volume_ml(heart.body(kLaBody), zp);
+  EXPECT_NEAR(v_lv, 125.0, 1.25) << "LV at target_edge_mm = " << GetParam();
+  EXPECT_NEAR(v_la, 40.0, 0.8) << "LA at target_edge_mm = " << GetParam();
+  // All bodies inside the fluid box with the clearance.
+  for (const auto& b : heart.bodies)
+    for (const auto& p : b.position_mm) {
+      ASSERT_GE(p.x(), kMinBoxClearanceMm);
+      ASSERT_LE(p.x(), s.fluid.box_x_mm - kMinBoxClearanceMm);
+      ASSERT_GE(p.y(), kMinBoxClearanceMm);
+      ASSERT_LE(p.y(), s.fluid.box_y_mm - kMinBoxClearanceMm);
+      ASSERT_GE(p.z(), kMinBoxClearanceMm);
+      ASSERT_LE(p.z(), s.fluid.box_z_mm - kMinBoxClearanceMm);
+    }
+  // Quality checks and intersections (build_left_heart runs them too; assert independently).
+  CheckOptions o;
+  o.plane_z_mm = zp;
+  o.plane_tolerance_mm = 1e-9 * zp;
+  o.degenerate_min_angle_deg = 0.1;
+  for (const auto& b : heart.bodies) {
+    const auto issues = check_body(b, o);
+    EXPECT_TRUE(issues.empty()) << b.name << ": " << (issues.empty() ? "" : issues[0].message);
+  }
+  EXPECT_TRUE(check_intersections(heart.body_pointers()).empty());
+  // Chambers: normals into the cavity (positive closed volume), openings only in the plane.
+  for (auto name : {kLvBody, kLaBody}) {
+    const TriMesh& m = heart.body(name);
+    const EdgeTopology topo(m);
+    const auto loops = boundary_loops(m, topo);
+    ASSERT_EQ(loops.size(), 1u) << name;
+    for (auto v : loops[0]) EXPECT_NEAR(m.position_mm[v].z(), zp, 1e-9);
+    // Inward: the normal at a node points towards the cavity centroid (within 90 degrees).
+    const Vec3 centre = cavity_centroid_mm(m, zp);
+    std::size_t outward = 0;
+    for (std::size_t t = 0; t < m.triangle_count(); ++t)
+      outward += m.unit_normal(t).dot(centre - m.centroid(t)) < 0;
+    EXPECT_LT(outward, m.triangle_count() / 50) << name;
+  }
+  // Aorta: normals into the lumen; leaflets: "+" side up (-z).
+  for (std::size_t k = 3; k < 8; ++k) {
+    const TriMesh& leaf = heart.bodies[k];
+    EXPECT_EQ(leaf.kind, BodyKind::kLeaflet);
+    for (std::size_t t = 0; t < leaf.triangle_count(); ++t) ASSERT_LT(leaf.unit_normal(t).z(), 0) << leaf.name;
+  }
+  // Clearances between unattached bodies.
+  EXPECT_GE(min_gap_mm(heart.body(kLaBody), heart.body(kAortaBody), 10), kMinBodyGapMm);
+}
+
+INSTANTIATE_TEST_SUITE_P(Resolutions, HeartAtResolution, ::testing::Values(2.0, 1.4, 3.0));
+
+TEST(Heart, DefaultLayoutMatchesTheModel) {
+  const auto s = defaults();
+  const LeftHeart heart = build(s);
+  const auto axis = apex_base_axis(heart.body(kLvBody));
+  EXPECT_NEAR(axis.length_mm, s.geometry.lv_long_axis_mm, 1e-9);   // base-apex length
+  EXPECT_NEAR(axis.direction.z(), 1.0, 1e-9);                         // z points to the apex
+  EXPECT_NEAR(2 * heart.plane.mitral_radius_mm, 24.0, 1e-12);
+  EXPECT_NEAR(2 * heart.plane.aortic_radius_mm, 19.0, 1e-12);
+  // The mitral orifice is posterior (-x) of the aortic one; the anterior leaflet is nearer.
+  EXPECT_LT(heart.plane.mitral_centre_mm.x(), heart.plane.aortic_centre_mm.x());
+  const Vec3 ant = surface_centroid_mm(heart.body(kMitralAnteriorBody));
+  const Vec3 post = surface_centroid_mm(heart.body(kMitralPosteriorBody));
+  EXPECT_LT((ant - heart.plane.aortic_centre_mm).norm(), (post - heart.plane.aortic_centre_mm).norm());
+  // Cusps sit above the plane (in the root), leaflets below (in the LV), LA above.
+  for (auto name : kAorticCuspBodies)
+    for (const auto& p : heart.body(name).position_mm) ASSERT_LE(p.z(), heart.plane.z_mm + 1e-9);
+  for (auto name : {kMitralAnteriorBody, kMitralPosteriorBody})
+    for (const auto& p : heart.body(name).position_mm) ASSERT_GE(p.z(), heart.plane.z_mm - 1e-9);
+  // Aortic root diameter at the sinuses, arch and descending diameters.
+  const TriMesh& aorta = heart.body(kAortaBody);
+  double root_max = 0;
+  for (const auto& p : aorta.position_mm)
+    if (p.z() < heart.plane.z_mm && p.z() > heart.plane.z_mm - heart.layout.root_height_mm &&
+        (p - heart.plane.aortic_centre_mm).y() <= 0)  // the arch leaves towards +y
+      root_max = std::max(root_max, (p - heart.plane.aortic_centre_mm).head<2>().norm());
+  EXPECT_NEAR(2 * root_max, s.geometry.aortic_root_diameter_mm, 0.5);
+  // Outflow nodes: a ring band at the descending end, radius = descending radius.
+  std::size_t outflow = 0;
+  for (std::size_t i = 0; i < aorta.node_count(); ++i)
+    if (aorta.region[i] & kOutflow) {
+      ++outflow;
+      const Vec3 d = aorta.position_mm[i] - heart.outflow.end_mm;
+      EXPECT_NEAR(d.head<2>().norm(), 0.5 * s.geometry.aortic_descending_diameter_mm, 0.05);
+    }
+  EXPECT_GT(outflow, 50u);
+}
+
+TEST(Heart, NamedRegionsArePresentOnTheRightBodies) {
+  const LeftHeart heart = build(defaults());
+  auto count = [&](std::string_view body, std::uint32_t bit) {
+    std::size_t n = 0;
+    for (auto r : heart.body(body).region) n += (r & bit) != 0;
+    return n;
+  };
+  EXPECT_GT(count(kLvBody, kHisBundle), 3u);
+  EXPECT_GT(count(kLaBody, kBachmannBundle), 3u);
+  for (auto bit : {kPvOstiumLeftSuperior, kPvOstiumLeftInferior, kPvOstiumRightSuperior, kPvOstiumRightInferior})
+    EXPECT_GT(count(kLaBody, bit), 5u) << region_name(bit);
+  EXPECT_EQ(count(kLvBody, kLvApex), 1u);
+  EXPECT_GT(count(kLvBody, kLvApexRing), 5u);
+  EXPECT_GT(count(kLvBody, kLvBaseRing), 20u);
+  EXPECT_GT(count(kAortaBody, kOutflow), 20u);
+  // Every deformable body is anchored; anchors lie in the plane.
+  for (const auto& b : heart.bodies) {
+    if (b.kind == BodyKind::kRigid) continue;
+    std::size_t anchors = 0;
+    for (std::size_t i = 0; i < b.node_count(); ++i)
+      if (b.region[i] & kAnchor) {
+        ++anchors;
+        EXPECT_NEAR(b.position_mm[i].z(), heart.plane.z_mm, 1e-9);
+      }
+    EXPECT_GT(anchors, 5u) << b.name;
+  }
+  // The ostia are on the posterior wall (-x of the mitral centre) and cover about pi r^2 each.
+  const TriMesh& la = heart.body(kLaBody);
+  const double ostium_area = surface_area_mm2(la, Tissue::kVeinOstium);
+  EXPECT_NEAR(ostium_area, 4 * M_PI * 25.0, 0.35 * 4 * M_PI * 25.0);
+  for (std::size_t i = 0; i < la.node_count(); ++i)
+    if (la.region[i] & kPvOstiumAny) {
+      EXPECT_LT(la.position_mm[i].x(), heart.plane.mitral_centre_mm.x());
+    }
+}
+
+TEST(Heart, VolumesFollowTheParameters) {
+  // Shape similarity: scaling every length by k and the volumes by k^3 scales the heart.
+  const auto s0 = defaults();
+  const LeftHeart h0 = build(s0);
+  auto s = s0;
+  const double k = 0.9;  // rims and gaps are fixed in mm: 0.8 brings the root within 2 mm of the LA
+  auto& g = s.geometry;
+  for (double* len : {&g.lv_short_axis_mm, &g.lv_long_axis_mm, &g.mitral_diameter_mm, &g.aortic_diameter_mm,
+                      &g.mitral_leaflet_length_mm, &g.aortic_root_diameter_mm, &g.aortic_arch_diameter_mm,
+                      &g.aortic_descending_diameter_mm, &g.pulmonary_vein_diameter_mm, &g.target_edge_mm})
+    *len *= k;
+  g.lv_volume_ml *= k * k * k;
+  g.la_volume_ml *= k * k * k;
+  const LeftHeart h1 = build(s);
+  EXPECT_NEAR(cavity_volume_ml(h1.body(kLvBody), h1.plane.z_mm), 125.0 * k * k * k, 1e-9);
+  EXPECT_NEAR(cavity_volume_ml(h1.body(kLaBody), h1.plane.z_mm), 40.0 * k * k * k, 1e-9);
+  EXPECT_NEAR(h1.layout.lv_truncation, h0.layout.lv_truncation, 1e-12);  // same LV shape
+  EXPECT_NEAR(h1.layout.la_equatorial_radius_mm, k * h0.layout.la_equatorial_radius_mm, 1e-9);
+  EXPECT_NEAR(apex_base_axis(h1.body(kLvBody)).length_mm, k * 75.0, 1e-9);
+
+  // LV axes alone scaled by 0.97 with the volume by 0.97^3: the same truncation, and the LV
+  // measured on the mesh is 0.97^3 of the default (smaller LVs leave no room for the default
+  // orifices, larger ones leave the box).
+  auto s2 = s0;
+  const double k2 = 0.97;
+  s2.geometry.lv_short_axis_mm *= k2;
+  s2.geometry.lv_long_axis_mm *= k2;
+  s2.geometry.lv_volume_ml *= k2 * k2 * k2;
+  const LeftHeart h2 = build(s2);
+  EXPECT_NEAR(h2.layout.lv_truncation, h0.layout.lv_truncation, 1e-12);
+  EXPECT_NEAR(cavity_volume_ml(h2.body(kLvBody), h2.plane.z_mm) / 125.0, k2 * k2 * k2, 1e-9);
+  EXPECT_NEAR(apex_base_axis(h2.body(kLvBody)).length_mm, k2 * 75.0, 1e-9);
+
+  // A larger volume at fixed axes truncates the ellipsoid lower (t grows); the LA radius
+  // grows with its volume.
+  auto s3 = s0;
+  s3.geometry.lv_volume_ml = 140;
+  s3.geometry.la_volume_ml = 60;
+  const LeftHeart h3 = build(s3);
+  EXPECT_GT(h3.layout.lv_truncation, h0.layout.lv_truncation);
+  EXPECT_NEAR(cavity_volume_ml(h3.body(kLvBody), h3.plane.z_mm), 140, 1e-9);
+  EXPECT_NEAR(cavity_volume_ml(h3.body(kLaBody), h3.plane.z_mm), 60, 1e-9);
+  EXPECT_GT(h3.layout.la_equatorial_radius_mm, h0.layout.la_equatorial_radius_mm);
+}
+
+TEST(Heart, HalvingTheLvAxesIsRejectedWithTheDefaultOrifices) {
+  // Half axes (29 x 37.5 mm, 125/8 ml) leave a 29 mm base ring for 24 + 19 mm orifices.
+  auto s = defaults();
+  s.geometry.lv_short_axis_mm /= 2;
+  s.geometry.lv_long_axis_mm /= 2;
+  s.geometry.lv_volume_ml /= 8;
+  try {
+    build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("do not fit in the valvular plane"), std::string::npos) << e.what();
+  }
+}
+
+// Helix angle measured on the mesh in an independent frame: e_c = the horizontal direction
+// counter-clockwise about +z, e_l = the projection of -z (towards the base), both in the
+// triangle plane; angle = atan2(f.e_l, f.e_c).
+double measured_lv_angle_deg(const TriMesh& lv, std::size_t t, const Vec3& axis_point) {
+  const Vec3 n = lv.unit_normal(t), c = lv.centroid(t) - axis_point;
+  Vec3 ec = Vec3::UnitZ().cross(Vec3(c.x(), c.y(), 0));
+  ec = (ec - ec.dot(n) * n).normalized();
+  Vec3 el = -Vec3::UnitZ();
+  el = (el - el.dot(n) * n);
+  el = (el - el.dot(ec) * ec).normalized();
+  const Vec3& f = lv.fibre[t];
+  return std::atan2(f.dot(el), f.dot(ec)) * 180 / M_PI;
+}
+
+class LvFibreAngle : public ::testing::TestWithParam<double> {};
+
+TEST_P(LvFibreAngle, MeasuredOnTheMeshEqualsTheParameter) {
+  auto s = defaults();
+  s.geometry.lv_fibre_angle_deg = GetParam();
+  const LeftHeart heart = build(s);
+  const TriMesh& lv = heart.body(kLvBody);
+  const Vec3 axis_point = heart.plane.centre_mm;
+  double sum = 0, worst = 0;
+  std::size_t n = 0;
+  for (std::size_t t = 0; t < lv.triangle_count(); ++t) {
+    if (lv.centroid(t).z() > heart.plane.z_mm + 0.9 * s.geometry.lv_long_axis_mm) continue;  // apex cap
+    const double d = measured_lv_angle_deg(lv, t, axis_point) - GetParam();
+    sum += d;
+    worst = std::max(worst, std::abs(d));
+    ++n;
+    EXPECT_NEAR(lv.fibre[t].norm(), 1.0, 1e-12);
+    EXPECT_NEAR(lv.fibre[t].dot(lv.unit_normal(t)), 0.0, 1e-12);
+  }
+  EXPECT_NEAR(sum / n, 0.0, 0.05) << "mean deviation";
+  EXPECT_LT(worst, 1.0) << "largest deviation";
+}
+
+INSTANTIATE_TEST_SUITE_P(Angles, LvFibreAngle, ::testing::Values(45.0, 60.0, -30.0));
+
+TEST(Heart, PassiveAndAtrialFibres) {
+  const LeftHeart heart = build(defaults());
+  // LA: fibres point up along the atrium (the projected vertical) wherever the wall is not
+  // horizontal.
+  const TriMesh& la = heart.body(kLaBody);
+  std::size_t checked = 0, aligned = 0;
+  for (std::size_t t = 0; t < la.triangle_count(); ++t) {
+    const Vec3 n = la.unit_normal(t);
+    if (std::abs(n.z()) > 0.7) continue;
+    Vec3 v = -Vec3::UnitZ();
+    v = (v - v.dot(n) * n).normalized();
+    ++checked;
+    aligned += la.fibre[t].dot(v) > std::cos(30 * M_PI / 180);
+  }
+  EXPECT_GT(static_cast<double>(aligned) / checked, 0.85);  // the sheared posterior bulge tilts meridians
+  // Aorta: circumferential, i.e. horizontal on the vertical descending segment.
+  const TriMesh& aorta = heart.body(kAortaBody);
+  for (std::size_t t = 0; t < aorta.triangle_count(); ++t) {
+    const auto& tri = aorta.tri[t];
+    if (!(aorta.region[tri[0]] & aorta.region[tri[1]] & aorta.region[tri[2]] & kOutflow)) continue;
+    EXPECT_LT(std::abs(aorta.fibre[t].z()), 1e-6);
+  }
+  // Mitral leaflets: along the free edge (y); cusps: circumferential about the aortic axis.
+  for (auto name : {kMitralAnteriorBody, kMitralPosteriorBody}) {
+    const TriMesh& m = heart.body(name);
+    double sum = 0;
+    for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+      EXPECT_GT(std::abs(m.fibre[t].y()), 0.1) << name;  // steep commissures tilt the projection
+      sum += std::abs(m.fibre[t].y());
+    }
+    EXPECT_GT(sum / m.triangle_count(), 0.8) << name;
+  }
+  for (auto name : kAorticCuspBodies) {
+    const TriMesh& m = heart.body(name);
+    for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+      const Vec3 r = m.centroid(t) - heart.plane.aortic_centre_mm;
+      EXPECT_LT(std::abs(m.fibre[t].dot(Vec3(r.x(), r.y(), 0).normalized())), 0.5) << name;
+    }
+  }
+}
+
+TEST(Heart, BoxTooSmallIsRejectedNamingTheBox) {
+  auto s = defaults();
+  s.fluid.box_z_mm = 120;
+  try {
+    build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fluid.box_z_mm = 120"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace systole::geometry
