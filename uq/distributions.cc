@@ -151,6 +151,23 @@ Distribution Distribution::truncated_normal(double mu, double sigma, double a, d
   return d;
 }
 
+Distribution Distribution::make(DistributionKind kind, std::span<const double> p) {
+  const std::size_t expected = kind == DistributionKind::truncated_normal ? 4 : 2;
+  if (p.size() != expected)
+    bad(std::string(to_string(kind)) + ": parameter count = " + num(p.size()) +
+        " is out of range (must be " + num(expected) +
+        (kind == DistributionKind::uniform           ? ": a, b)"
+         : kind == DistributionKind::truncated_normal ? ": mu, sigma, a, b)"
+                                                      : ": mu, sigma)"));
+  switch (kind) {
+    case DistributionKind::uniform: return uniform(p[0], p[1]);
+    case DistributionKind::normal: return normal(p[0], p[1]);
+    case DistributionKind::lognormal: return lognormal(p[0], p[1]);
+    case DistributionKind::truncated_normal: return truncated_normal(p[0], p[1], p[2], p[3]);
+  }
+  bad("distribution kind is unknown");
+}
+
 std::vector<double> Distribution::parameters() const {
   if (kind_ == DistributionKind::truncated_normal) return {p0_, p1_, p2_, p3_};
   return {p0_, p1_};

@@ -57,6 +57,9 @@ class Distribution {
   static Distribution normal(double mu, double sigma);
   static Distribution lognormal(double mu, double sigma);  // mu, sigma of log X
   static Distribution truncated_normal(double mu, double sigma, double a, double b);
+  // The factory of `kind` with parameters in the order of parameters() below (2 for uniform,
+  // normal, lognormal; 4 for truncated_normal); std::invalid_argument on a wrong count.
+  static Distribution make(DistributionKind kind, std::span<const double> parameters);
 
   DistributionKind kind() const { return kind_; }
   // Parameters as given to the factory: uniform {a, b}; normal and lognormal {mu, sigma};

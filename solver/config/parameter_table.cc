@@ -259,6 +259,14 @@ std::vector<Param> build_table() {
     q.max_exclusive = true;
     t.push_back(q);
   }
+  // --- analytic test functions (scene "analytic") ----------------------------------------
+  t.push_back(SYSTOLE_CHOICE(analytic.function, "ishigami", (std::vector<std::string_view>{"ishigami"}),
+                             "Closed-form test function of scene 'analytic' (Ishigami & Homma 1990)."));
+  t.push_back(SYSTOLE_REAL(analytic.x1, "", 0, -10, 10, "Input x1 (Ishigami: uniform on [-pi, pi] in the benchmark)."));
+  t.push_back(SYSTOLE_REAL(analytic.x2, "", 0, -10, 10, "Input x2."));
+  t.push_back(SYSTOLE_REAL(analytic.x3, "", 0, -10, 10, "Input x3."));
+  t.push_back(SYSTOLE_REAL(analytic.a, "", 7, -100, 100, "Ishigami a (benchmark value 7)."));
+  t.push_back(SYSTOLE_REAL(analytic.b, "", 0.1, -100, 100, "Ishigami b (benchmark value 0.1)."));
   return t;
 }
 

@@ -11,15 +11,14 @@
 namespace systole::config {
 
 const std::vector<std::string>& known_scenes() {
-  static const std::vector<std::string> scenes{"lumped",           "geometry", "electro",
-                                               "mechanics",        "electromechanics",
-                                               "fluid",            "fsi",      "fsei"};
+  static const std::vector<std::string> scenes{"lumped", "analytic", "geometry", "electro", "mechanics",
+                                               "electromechanics", "fluid", "fsi", "fsei"};
   return scenes;
 }
 
 // Updated as each scene lands (its issue); see solver/scene/.
 const std::vector<std::string>& implemented_scenes() {
-  static const std::vector<std::string> scenes{"lumped"};
+  static const std::vector<std::string> scenes{"lumped", "analytic"};
   return scenes;
 }
 

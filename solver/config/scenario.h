@@ -102,6 +102,12 @@ struct Outputs {
   std::vector<double> field_phases;
 };
 
+struct Analytic {
+  std::string function;
+  double x1, x2, x3;
+  double a, b;
+};
+
 struct Scenario {
   std::string scene;
   double heart_rate_bpm;
@@ -115,6 +121,7 @@ struct Scenario {
   Lumped lumped;
   Coupling coupling;
   Outputs outputs;
+  Analytic analytic;
 
   double period_ms() const { return 60000.0 / heart_rate_bpm; }
 };

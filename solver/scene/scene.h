@@ -4,6 +4,8 @@
 // Every rank of an MPI worker calls run() with the same scenario; RunControl is how the
 // caller sees progress and asks for a stop.
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "solver/config/scenario.h"
 #include "solver/core/run_result.h"
@@ -29,5 +31,10 @@ class Cancelled : public std::runtime_error {
 // that blew up, with its diagnosis; never a NaN result), or systole::InputError.
 // Adds metrics["wall_time_s"] (this run's wall-clock time).
 RunResult run(const config::Scenario& scenario, RunControl& control);
+
+// The metric names a scene always reports (metrics.json keys): what campaigns may name as
+// quantities of interest. Empty for an unknown scene. tests/unit/scene_test.cc checks them
+// against real runs.
+const std::vector<std::string>& metric_names(const std::string& scene);
 
 }  // namespace systole::scene

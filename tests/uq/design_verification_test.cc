@@ -15,7 +15,7 @@ namespace {
 
 constexpr double kAlpha = 0.01;
 
-TEST(KolmogorovSmirnov, StatisticAndCriticalValueByHand) {
+TEST(UqKolmogorovSmirnov, StatisticAndCriticalValueByHand) {
   // Sample {0.1, 0.4, 0.7} vs U(0,1): max over i of (i/3 - x_i, x_i - (i-1)/3)
   // = max(0.2333, 0.1, 0.2667, 0.0667, 0.3, 0.0333) = 0.3.
   EXPECT_NEAR(ks_statistic_uniform(std::vector<double>{0.7, 0.1, 0.4}), 0.3, 1e-15);
@@ -31,7 +31,7 @@ TEST(KolmogorovSmirnov, StatisticAndCriticalValueByHand) {
   EXPECT_NEAR(kolmogorov_sf(0.5), 0.9639452, 1e-6);
 }
 
-TEST(KolmogorovSmirnov, LatinHypercubeMarginalsAreUniform) {
+TEST(UqKolmogorovSmirnov, LatinHypercubeMarginalsAreUniform) {
   const std::size_t n = 1000;
   const Matrix m = latin_hypercube(n, 8, 31);
   for (std::size_t c = 0; c < m.cols(); ++c) {
@@ -41,7 +41,7 @@ TEST(KolmogorovSmirnov, LatinHypercubeMarginalsAreUniform) {
   }
 }
 
-TEST(KolmogorovSmirnov, SobolMarginalsAreUniform) {
+TEST(UqKolmogorovSmirnov, SobolMarginalsAreUniform) {
   for (std::size_t n : {1000u, 1024u}) {
     const Matrix m = sobol(n, kSobolMaxDimensions, 32);
     for (std::size_t c = 0; c < m.cols(); ++c)
@@ -50,7 +50,7 @@ TEST(KolmogorovSmirnov, SobolMarginalsAreUniform) {
   }
 }
 
-TEST(KolmogorovSmirnov, MappedMarginalsFollowTheirDistributions) {
+TEST(UqKolmogorovSmirnov, MappedMarginalsFollowTheirDistributions) {
   const std::vector<Distribution> dists = {
       Distribution::normal(3, 2), Distribution::lognormal(0.5, 0.4),
       Distribution::truncated_normal(1, 1, 0, 2.5), Distribution::uniform(-4, 9)};
@@ -64,7 +64,7 @@ TEST(KolmogorovSmirnov, MappedMarginalsFollowTheirDistributions) {
   }
 }
 
-TEST(KolmogorovSmirnov, RejectsAWrongMarginal) {
+TEST(UqKolmogorovSmirnov, RejectsAWrongMarginal) {
   // The test has power: squared uniforms (CDF sqrt(x)) are far from U(0, 1)
   // (D -> max |sqrt(x) - x| = 1/4, six times the critical value 0.0515 at n = 1000).
   const std::size_t n = 1000;
@@ -75,7 +75,7 @@ TEST(KolmogorovSmirnov, RejectsAWrongMarginal) {
   EXPECT_LT(ks_statistic(sq, [](double v) { return std::sqrt(v); }), ks_critical_value(n, kAlpha));
 }
 
-TEST(Discrepancy, SinglePointByHand) {
+TEST(UqDiscrepancy, SinglePointByHand) {
   // One point x = 1/2 in d = 1: CD^2 = 13/12 - 2 (1) + 1 = 1/12; WD^2 = -4/3 + 3/2 = 1/6.
   const Matrix p(1, 1, 0.5);
   EXPECT_NEAR(centered_l2_discrepancy(p), std::sqrt(1.0 / 12.0), 1e-15);
@@ -85,7 +85,7 @@ TEST(Discrepancy, SinglePointByHand) {
   EXPECT_THROW(centered_l2_discrepancy(Matrix(1, 1, 1.5)), std::invalid_argument);
 }
 
-TEST(Discrepancy, SobolBeatsMonteCarloAtTheSameN) {
+TEST(UqDiscrepancy, SobolBeatsMonteCarloAtTheSameN) {
   const std::size_t n = 512;
   for (std::size_t d : {2u, 5u, 10u}) {
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {

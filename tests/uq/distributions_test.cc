@@ -27,7 +27,7 @@ void expect_invalid(F&& f, const std::vector<std::string>& parts) {
   }
 }
 
-TEST(StandardNormal, QuantileMatchesTabulatedValues) {
+TEST(UqStandardNormal, QuantileMatchesTabulatedValues) {
   // Reference values: Abramowitz & Stegun table 26.5 / any 16-digit normal table.
   EXPECT_DOUBLE_EQ(standard_normal_quantile(0.5), 0.0);
   EXPECT_NEAR(standard_normal_quantile(0.975), 1.959963984540054, 1e-14);
@@ -41,7 +41,7 @@ TEST(StandardNormal, QuantileMatchesTabulatedValues) {
   EXPECT_EQ(standard_normal_quantile(1.0), kInf);
 }
 
-TEST(StandardNormal, QuantileInvertsCdfAcrossTheRange) {
+TEST(UqStandardNormal, QuantileInvertsCdfAcrossTheRange) {
   // Lower half through the CDF (for z > 0, p = Phi(z) itself has lost the digits of 1 - p, so
   // the upper half is checked through the survival function below).
   for (double z = -37.0; z <= 0.0; z += 0.25) {
@@ -54,7 +54,7 @@ TEST(StandardNormal, QuantileInvertsCdfAcrossTheRange) {
   }
 }
 
-TEST(Distribution, UniformQuantileSupportMoments) {
+TEST(UqDistribution, UniformQuantileSupportMoments) {
   const auto d = Distribution::uniform(2.0, 6.0);
   EXPECT_DOUBLE_EQ(d.quantile(0.25), 3.0);
   EXPECT_DOUBLE_EQ(d.quantile(0.0), 2.0);
@@ -67,7 +67,7 @@ TEST(Distribution, UniformQuantileSupportMoments) {
   EXPECT_DOUBLE_EQ(d.pdf(5.0), 0.25);
 }
 
-TEST(Distribution, NormalQuantile) {
+TEST(UqDistribution, NormalQuantile) {
   const auto d = Distribution::normal(10.0, 2.0);
   EXPECT_NEAR(d.quantile(0.975), 10.0 + 2.0 * 1.959963984540054, 1e-13);
   EXPECT_DOUBLE_EQ(d.quantile(0.5), 10.0);
@@ -76,7 +76,7 @@ TEST(Distribution, NormalQuantile) {
   EXPECT_DOUBLE_EQ(d.std_dev(), 2.0);
 }
 
-TEST(Distribution, LognormalQuantileAndMoments) {
+TEST(UqDistribution, LognormalQuantileAndMoments) {
   const auto d = Distribution::lognormal(0.0, 1.0);
   EXPECT_NEAR(d.quantile(0.5), 1.0, 1e-15);
   EXPECT_NEAR(d.quantile(0.975), std::exp(1.959963984540054), 1e-12);
@@ -90,7 +90,7 @@ TEST(Distribution, LognormalQuantileAndMoments) {
   EXPECT_GT(e.quantile(1e-300), 0.0);
 }
 
-TEST(Distribution, TruncatedNormalHalfNormal) {
+TEST(UqDistribution, TruncatedNormalHalfNormal) {
   // N(0, 1) on [0, inf) is the half-normal: F^-1(u) = Phi^-1((1 + u) / 2),
   // mean sqrt(2/pi), variance 1 - 2/pi.
   const auto d = Distribution::truncated_normal(0.0, 1.0, 0.0, kInf);
@@ -102,7 +102,7 @@ TEST(Distribution, TruncatedNormalHalfNormal) {
   EXPECT_EQ(d.support().hi, kInf);
 }
 
-TEST(Distribution, TruncatedNormalSymmetricAndRoundTrip) {
+TEST(UqDistribution, TruncatedNormalSymmetricAndRoundTrip) {
   const auto d = Distribution::truncated_normal(5.0, 2.0, 3.0, 7.0);  // +-1 sigma
   EXPECT_NEAR(d.quantile(0.5), 5.0, 1e-14);
   EXPECT_NEAR(d.mean(), 5.0, 1e-14);
@@ -118,7 +118,7 @@ TEST(Distribution, TruncatedNormalSymmetricAndRoundTrip) {
   }
 }
 
-TEST(Distribution, TruncatedNormalFarUpperTailKeepsPrecision) {
+TEST(UqDistribution, TruncatedNormalFarUpperTailKeepsPrecision) {
   // N(0, 1) on [8, inf): mass 6.2e-16, where Phi(8) rounds to 1 in double precision. The
   // median is ~ 8 + ln 2 / 8 (exponential tail approximation).
   const auto d = Distribution::truncated_normal(0.0, 1.0, 8.0, kInf);
@@ -135,7 +135,7 @@ TEST(Distribution, TruncatedNormalFarUpperTailKeepsPrecision) {
   EXPECT_NEAR(lower.quantile(0.5), -median, 1e-12);
 }
 
-TEST(Distribution, QuantilesAreMonotoneAndInsideSupport) {
+TEST(UqDistribution, QuantilesAreMonotoneAndInsideSupport) {
   const std::vector<Distribution> all = {
       Distribution::uniform(-1, 1), Distribution::normal(0, 3), Distribution::lognormal(1, 0.5),
       Distribution::truncated_normal(1, 2, -0.5, 10)};
@@ -150,7 +150,7 @@ TEST(Distribution, QuantilesAreMonotoneAndInsideSupport) {
   }
 }
 
-TEST(Distribution, SupportWithinFieldRange) {
+TEST(UqDistribution, SupportWithinFieldRange) {
   EXPECT_TRUE(Distribution::uniform(0.5, 2).support().within(0, 10));
   EXPECT_FALSE(Distribution::uniform(0.5, 20).support().within(0, 10));
   EXPECT_FALSE(Distribution::normal(1, 0.1).support().within(0, kInf));
@@ -158,7 +158,7 @@ TEST(Distribution, SupportWithinFieldRange) {
   EXPECT_TRUE(Distribution::truncated_normal(1, 0.5, 0.2, kInf).support().within(0, kInf));
 }
 
-TEST(Distribution, InvalidParametersNameFieldValueAndRange) {
+TEST(UqDistribution, InvalidParametersNameFieldValueAndRange) {
   expect_invalid([] { Distribution::normal(0, -1); }, {"normal", "sigma", "-1", "> 0"});
   expect_invalid([] { Distribution::normal(0, 0); }, {"sigma", "0"});
   expect_invalid([] { Distribution::lognormal(kInf, 1); }, {"lognormal", "mu", "inf", "finite"});
@@ -174,7 +174,7 @@ TEST(Distribution, InvalidParametersNameFieldValueAndRange) {
   EXPECT_EQ(parse_distribution_kind("truncated_normal"), DistributionKind::truncated_normal);
 }
 
-TEST(Distribution, ToPhysicalMapsColumns) {
+TEST(UqDistribution, ToPhysicalMapsColumns) {
   Matrix u(2, 2);
   u(0, 0) = 0.25; u(0, 1) = 0.5;
   u(1, 0) = 0.75; u(1, 1) = 0.975;
@@ -187,7 +187,16 @@ TEST(Distribution, ToPhysicalMapsColumns) {
   expect_invalid([&] { to_physical(u, std::vector<Distribution>{d[0]}); }, {"2 columns", "1 distributions"});
 }
 
-TEST(Distribution, DescribeListsParameters) {
+TEST(UqDistribution, MakeFromKindAndParameters) {
+  const auto d = Distribution::make(DistributionKind::truncated_normal, std::vector<double>{1, 2, 0, 5});
+  EXPECT_EQ(d.parameters(), (std::vector<double>{1, 2, 0, 5}));
+  EXPECT_EQ(Distribution::make(parse_distribution_kind("lognormal"), std::vector<double>{0, 1}).kind(),
+            DistributionKind::lognormal);
+  expect_invalid([] { Distribution::make(DistributionKind::normal, std::vector<double>{1}); },
+                 {"normal", "parameter count = 1", "2: mu, sigma"});
+}
+
+TEST(UqDistribution, DescribeListsParameters) {
   EXPECT_EQ(Distribution::truncated_normal(1, 0.5, 0, kInf).describe(),
             "truncated_normal(mu=1, sigma=0.5, a=0, b=inf)");
   EXPECT_EQ(Distribution::uniform(1, 2).parameters(), (std::vector<double>{1, 2}));

@@ -42,7 +42,7 @@ std::vector<double> evaluate_ishigami(const SaltelliDesign& s) {
   return y;
 }
 
-TEST(Ishigami, FunctionAndExactIndices) {
+TEST(UqIshigami, FunctionAndExactIndices) {
   const double origin[3] = {0, 0, 0};
   EXPECT_EQ(ishigami(origin), 0.0);
   const double p[3] = {std::numbers::pi / 2, std::numbers::pi / 2, 1.0};
@@ -60,7 +60,7 @@ TEST(Ishigami, FunctionAndExactIndices) {
   EXPECT_NEAR(e.total[2], 0.2437, 1e-4);
 }
 
-TEST(Ishigami, SobolIndicesWithinBootstrapIntervalsAndTolerance) {
+TEST(UqIshigami, SobolIndicesWithinBootstrapIntervalsAndTolerance) {
   const SaltelliDesign s = saltelli(kBase, 3, 2024);
   const std::vector<double> y = evaluate_ishigami(s);
   const SobolIndices r = sobol_indices(s.layout, y, {.bootstrap_resamples = 1000, .confidence = 0.95, .seed = 7});
@@ -84,7 +84,7 @@ TEST(Ishigami, SobolIndicesWithinBootstrapIntervalsAndTolerance) {
   }
 }
 
-TEST(Ishigami, FailedSamplesAreExcludedNotFatal) {
+TEST(UqIshigami, FailedSamplesAreExcludedNotFatal) {
   // Knock out every 100th evaluation: their row groups are dropped, counted, and the indices
   // stay within tolerance on the remaining rows.
   const SaltelliDesign s = saltelli(kBase, 3, 2024);

@@ -34,14 +34,14 @@ void expect_open_unit_cube(const Matrix& m) {
   }
 }
 
-TEST(Random, Mt19937_64IsTheStandardOne) {
+TEST(UqRandom, Mt19937_64IsTheStandardOne) {
   // C++ standard [rand.predef]: the 10000th output of a default-constructed mt19937_64.
   Rng rng;
   rng.discard(9999);
   EXPECT_EQ(rng(), 9981545732273789042ULL);
 }
 
-TEST(Random, UniformBelowIsUnbiasedAndInRange) {
+TEST(UqRandom, UniformBelowIsUnbiasedAndInRange) {
   Rng rng(7);
   std::vector<int> counts(3, 0);
   for (int i = 0; i < 30000; ++i) ++counts[uniform_below(rng, 3)];
@@ -49,7 +49,7 @@ TEST(Random, UniformBelowIsUnbiasedAndInRange) {
   EXPECT_EQ(uniform_below(rng, 1), 0u);
 }
 
-TEST(Designs, ShapesAndOpenUnitCube) {
+TEST(UqDesigns, ShapesAndOpenUnitCube) {
   for (auto kind : {DesignKind::monte_carlo, DesignKind::latin_hypercube, DesignKind::sobol}) {
     const Matrix m = unit_design(kind, 100, 7, 1);
     EXPECT_EQ(m.rows(), 100u);
@@ -58,7 +58,7 @@ TEST(Designs, ShapesAndOpenUnitCube) {
   }
 }
 
-TEST(Designs, SameSeedSameDesignDifferentSeedDifferentDesign) {
+TEST(UqDesigns, SameSeedSameDesignDifferentSeedDifferentDesign) {
   for (auto kind : {DesignKind::monte_carlo, DesignKind::latin_hypercube, DesignKind::sobol}) {
     const Matrix a = unit_design(kind, 64, 5, 12345);
     const Matrix b = unit_design(kind, 64, 5, 12345);
@@ -73,7 +73,7 @@ TEST(Designs, SameSeedSameDesignDifferentSeedDifferentDesign) {
   EXPECT_NE(s1.points, s3.points);
 }
 
-TEST(Designs, GoldenValuesPinTheStreams) {
+TEST(UqDesigns, GoldenValuesPinTheStreams) {
   // Designs must not change across platforms or releases: a stored campaign (seed, design)
   // has to regenerate the same inputs. These literals were produced by this implementation.
   EXPECT_EQ(monte_carlo(3, 2, 42)(2, 1), 0x1.e60a14eeb69cep-2);
@@ -82,14 +82,14 @@ TEST(Designs, GoldenValuesPinTheStreams) {
   EXPECT_EQ(saltelli(4, 2, 42).points(9, 1), 0x1.295aee28f3383p-1);
 }
 
-TEST(Designs, ColumnsDoNotDependOnTheNumberOfDimensions) {
+TEST(UqDesigns, ColumnsDoNotDependOnTheNumberOfDimensions) {
   for (auto kind : {DesignKind::monte_carlo, DesignKind::latin_hypercube, DesignKind::sobol}) {
     const Matrix a = unit_design(kind, 50, 2, 3), b = unit_design(kind, 50, 4, 3);
     EXPECT_EQ(a.column(1), b.column(1)) << to_string(kind);
   }
 }
 
-TEST(Designs, LatinHypercubeHasOnePointPerStratum) {
+TEST(UqDesigns, LatinHypercubeHasOnePointPerStratum) {
   const std::size_t n = 97;
   const Matrix m = latin_hypercube(n, 6, 2024);
   for (std::size_t c = 0; c < m.cols(); ++c) {
@@ -99,7 +99,7 @@ TEST(Designs, LatinHypercubeHasOnePointPerStratum) {
   }
 }
 
-TEST(Sobol, RawSequenceMatchesPublishedPoints) {
+TEST(UqSobol, RawSequenceMatchesPublishedPoints) {
   // First 8 points of the 2-D Sobol' sequence with Joe–Kuo direction numbers in Gray-code
   // order (as printed by Joe & Kuo's sobol.cc and SciPy's qmc.Sobol(d=2, scramble=False)).
   const Matrix m = sobol(8, 2, 0, SobolScrambling::none);
@@ -109,7 +109,7 @@ TEST(Sobol, RawSequenceMatchesPublishedPoints) {
     for (int k = 0; k < 2; ++k) EXPECT_EQ(m(i, k), x[i][k]) << i << "," << k;
 }
 
-TEST(Sobol, PropertyAHoldsForTheFirstSixteenDimensions) {
+TEST(UqSobol, PropertyAHoldsForTheFirstSixteenDimensions) {
   // Joe & Kuo's direction numbers satisfy Sobol's property A up to dimension 1111: the first
   // 2^d points of the d-dimensional sequence have exactly one point in each of the 2^d
   // half-width sub-cubes. Checked for d = 16 (65536 points). A published property of the data
@@ -126,7 +126,7 @@ TEST(Sobol, PropertyAHoldsForTheFirstSixteenDimensions) {
   }
 }
 
-TEST(Sobol, EveryDimensionIsAOneDimensionalNet) {
+TEST(UqSobol, EveryDimensionIsAOneDimensionalNet) {
   // For n = 2^m, every coordinate of the first n points takes each value k / n exactly once
   // (raw), and each interval [k/n, (k+1)/n) holds exactly one point (scrambled).
   const std::size_t n = 1024;
@@ -140,7 +140,7 @@ TEST(Sobol, EveryDimensionIsAOneDimensionalNet) {
   }
 }
 
-TEST(Sobol, OwenScramblingKeepsTheTwoDimensionalNetOfTheFirstPair) {
+TEST(UqSobol, OwenScramblingKeepsTheTwoDimensionalNetOfTheFirstPair) {
   // Dimensions 1 and 2 of Sobol' form a (0, m, 2)-net for every m: each elementary box of
   // volume 1/n (2^a x 2^(m-a) grid) holds exactly one of the first n = 2^m points. A nested
   // scramble preserves this; a broken scramble would not.
@@ -156,14 +156,14 @@ TEST(Sobol, OwenScramblingKeepsTheTwoDimensionalNetOfTheFirstPair) {
   }
 }
 
-TEST(Sobol, ScramblingIsNotTheRawSequence) {
+TEST(UqSobol, ScramblingIsNotTheRawSequence) {
   const Matrix raw = sobol(16, 3, 1, SobolScrambling::none);
   const Matrix scr = sobol(16, 3, 1);
   EXPECT_NE(raw(0, 0), scr(0, 0));
   EXPECT_GT(scr(0, 0), 0.0);  // the first raw point (0) is moved inside the cube
 }
 
-TEST(Saltelli, LayoutIndexingRoundTrips) {
+TEST(UqSaltelli, LayoutIndexingRoundTrips) {
   const SaltelliLayout l(5, 3);
   EXPECT_EQ(l.evaluations(), 25u);
   EXPECT_EQ(l.blocks_per_row(), 5u);
@@ -181,7 +181,7 @@ TEST(Saltelli, LayoutIndexingRoundTrips) {
   expect_invalid([&] { l.evaluation(0, 5); }, {"block = 5", "< 5"});
 }
 
-TEST(Saltelli, MatricesAreBuiltFromAAndB) {
+TEST(UqSaltelli, MatricesAreBuiltFromAAndB) {
   for (auto base : {DesignKind::sobol, DesignKind::monte_carlo, DesignKind::latin_hypercube}) {
     const std::size_t n = 16, d = 4;
     const SaltelliDesign s = saltelli(n, d, 3, base);
@@ -201,7 +201,7 @@ TEST(Saltelli, MatricesAreBuiltFromAAndB) {
   }
 }
 
-TEST(Designs, InvalidArgumentsNameFieldValueAndRange) {
+TEST(UqDesigns, InvalidArgumentsNameFieldValueAndRange) {
   expect_invalid([] { monte_carlo(0, 3, 1); }, {"monte_carlo", "samples = 0", ">= 1"});
   expect_invalid([] { latin_hypercube(10, 0, 1); }, {"latin_hypercube", "dimensions = 0"});
   expect_invalid([] { sobol(10, 41, 1); }, {"sobol", "dimensions = 41", "1..40"});

@@ -25,7 +25,7 @@ std::vector<double> evaluate(const SaltelliDesign& s, const std::vector<double>&
   return y;
 }
 
-TEST(SobolIndices, ThreeRowsByHand) {
+TEST(UqSobolIndices, ThreeRowsByHand) {
   // Rows (f_A, f_B, f_AB0): (1, 2, 2), (2, 0, 1), (3, 4, 4).
   // ybar = 12/6 = 2; V = (1 + 0 + 1 + 0 + 4 + 4) / 5 = 2.
   // Centred: fa = (-1, 0, 1), fb = (0, -2, 2), fab = (0, -1, 2).
@@ -42,7 +42,7 @@ TEST(SobolIndices, ThreeRowsByHand) {
   EXPECT_TRUE(r.note.empty());
 }
 
-TEST(SobolIndices, AdditiveModel) {
+TEST(UqSobolIndices, AdditiveModel) {
   // Y = sum c_i X_i, X_i ~ U(0, 1): S_i = ST_i = c_i^2 / sum c_j^2 = (1, 4, 9, 0) / 14.
   const std::vector<double> c = {1, 2, 3, 0};
   const SaltelliDesign s = saltelli(4096, 4, 11);
@@ -58,7 +58,7 @@ TEST(SobolIndices, AdditiveModel) {
   EXPECT_EQ(r.total[3].value, 0.0);  // X_3 has no effect at all: f_A == f_AB3 exactly
 }
 
-TEST(SobolIndices, FailedEvaluationsDropTheirWholeRow) {
+TEST(UqSobolIndices, FailedEvaluationsDropTheirWholeRow) {
   const std::vector<double> c = {1, 2, 3};
   const std::size_t n = 64, d = 3;
   const SaltelliDesign s = saltelli(n, d, 4);
@@ -92,7 +92,7 @@ TEST(SobolIndices, FailedEvaluationsDropTheirWholeRow) {
   EXPECT_DOUBLE_EQ(ro.first_order[0].value, r.first_order[0].value);
 }
 
-TEST(SobolIndices, TooFewRowsOrConstantOutputGiveNaNWithANote) {
+TEST(UqSobolIndices, TooFewRowsOrConstantOutputGiveNaNWithANote) {
   const SaltelliLayout layout(2, 1);
   const SobolIndices one = sobol_indices(layout, std::vector<double>{1, 2, 3, kNaN, 1, 1});
   EXPECT_EQ(one.rows_used, 1u);
@@ -103,7 +103,7 @@ TEST(SobolIndices, TooFewRowsOrConstantOutputGiveNaNWithANote) {
   EXPECT_NE(flat.note.find("constant"), std::string::npos) << flat.note;
 }
 
-TEST(SobolIndices, BootstrapIsSeeded) {
+TEST(UqSobolIndices, BootstrapIsSeeded) {
   const SaltelliDesign s = saltelli(256, 3, 8);
   const std::vector<double> y = evaluate(s, {1, 2, 3});
   const auto a = sobol_indices(s.layout, y, {.bootstrap_resamples = 100, .seed = 1});
@@ -119,7 +119,7 @@ TEST(SobolIndices, BootstrapIsSeeded) {
   EXPECT_GE(w.first_order[1].ci_high, a.first_order[1].ci_high);
 }
 
-TEST(SobolIndices, InvalidArguments) {
+TEST(UqSobolIndices, InvalidArguments) {
   const SaltelliLayout layout(4, 2);
   const std::vector<double> short_y(15, 1.0);
   try {

@@ -15,7 +15,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-TEST(Percentiles, Type7LinearInterpolationByHand) {
+TEST(UqPercentiles, Type7LinearInterpolationByHand) {
   // Sorted {1, 2, 3, 4, 10}: h = 4 p. p = .05 -> 1 + .2 (2 - 1) = 1.2; .25 -> 2; .5 -> 3;
   // .75 -> 4; .95 -> h = 3.8 -> 4 + .8 (10 - 4) = 8.8.
   const std::vector<double> v = {10, 3, 1, 4, 2};
@@ -34,7 +34,7 @@ TEST(Percentiles, Type7LinearInterpolationByHand) {
   EXPECT_THROW(percentiles(std::vector<double>{kNaN}, std::vector<double>{50}), std::invalid_argument);
 }
 
-TEST(Summary, MeanSampleStdPercentilesAndMissingCount) {
+TEST(UqSummary, MeanSampleStdPercentilesAndMissingCount) {
   // Finite values {10, 3, 1, 4, 2}: mean 4, sum of squares 9 + 4 + 1 + 0 + 36 = 50,
   // sample variance 50 / 4 = 12.5. NaN and inf are two failed samples.
   const std::vector<double> y = {10, kNaN, 3, 1, kInf, 4, 2};
@@ -56,7 +56,7 @@ TEST(Summary, MeanSampleStdPercentilesAndMissingCount) {
   EXPECT_EQ(counted, 5u);
 }
 
-TEST(Summary, OptionalOverloadTreatsNulloptAsMissing) {
+TEST(UqSummary, OptionalOverloadTreatsNulloptAsMissing) {
   const std::vector<std::optional<double>> y = {1.0, std::nullopt, 3.0, std::nullopt};
   const QoiSummary s = summarize(y);
   EXPECT_EQ(s.used, 2u);
@@ -65,7 +65,7 @@ TEST(Summary, OptionalOverloadTreatsNulloptAsMissing) {
   EXPECT_NEAR(s.std_dev, std::sqrt(2.0), 1e-15);
 }
 
-TEST(Summary, AllMissingGivesNaNAndCounts) {
+TEST(UqSummary, AllMissingGivesNaNAndCounts) {
   const std::vector<double> y = {kNaN, kNaN};
   const QoiSummary s = summarize(y);
   EXPECT_EQ(s.used, 0u);
@@ -77,7 +77,7 @@ TEST(Summary, AllMissingGivesNaNAndCounts) {
   EXPECT_TRUE(std::isnan(one.std_dev));  // n - 1 = 0
 }
 
-TEST(Histogram, GivenBins) {
+TEST(UqHistogram, GivenBins) {
   // {0..4} in 2 bins: [0, 2) holds 0, 1; [2, 4] (last bin closed) holds 2, 3, 4.
   const Histogram h = histogram(std::vector<double>{0, 1, 2, 3, 4, kNaN}, 2);
   EXPECT_EQ(h.rule, "given");
@@ -85,7 +85,7 @@ TEST(Histogram, GivenBins) {
   EXPECT_EQ(h.counts, (std::vector<std::size_t>{2, 3}));
 }
 
-TEST(Histogram, FreedmanDiaconis) {
+TEST(UqHistogram, FreedmanDiaconis) {
   // 0..99: IQR = 74.25 - 24.75 = 49.5, h = 2 * 49.5 / 100^(1/3) = 21.33,
   // bins = ceil(99 / 21.33) = 5, each holding 20 values.
   std::vector<double> v;
@@ -99,7 +99,7 @@ TEST(Histogram, FreedmanDiaconis) {
   EXPECT_EQ(histogram(v, 0, 3).counts.size(), 3u);
 }
 
-TEST(Histogram, DegenerateSamples) {
+TEST(UqHistogram, DegenerateSamples) {
   // IQR = 0 but a spread: Sturges, ceil(log2 8) + 1 = 4 bins.
   const Histogram s = histogram(std::vector<double>{1, 1, 1, 1, 1, 1, 1, 5});
   EXPECT_EQ(s.rule, "sturges");
@@ -110,7 +110,7 @@ TEST(Histogram, DegenerateSamples) {
   EXPECT_THROW(histogram(std::vector<double>{1, 2}, 0, 0), std::invalid_argument);
 }
 
-TEST(Correlation, PearsonAndSpearmanByHand) {
+TEST(UqCorrelation, PearsonAndSpearmanByHand) {
   // x = 1..5, y = {2, 4, 5, 4, 5}: sxy = 6, sxx = 10, syy = 6 -> r = 6 / sqrt(60).
   // Ranks of y with ties averaged: {1, 2.5, 4.5, 2.5, 4.5}: sxy = 7, syy = 9 -> rho = 7 / sqrt(90).
   const std::vector<double> x = {1, 2, 3, 4, 5}, y = {2, 4, 5, 4, 5};
@@ -126,7 +126,7 @@ TEST(Correlation, PearsonAndSpearmanByHand) {
   EXPECT_THROW(pearson(x, std::vector<double>{1, 2}), std::invalid_argument);
 }
 
-TEST(Correlation, InputCorrelationsDropPairsWithMissingQoi) {
+TEST(UqCorrelation, InputCorrelationsDropPairsWithMissingQoi) {
   Matrix inputs(7, 2);
   const std::vector<double> x = {1, 2, 3, 4, 5, 6, 7};
   for (std::size_t r = 0; r < 7; ++r) {

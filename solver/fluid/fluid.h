@@ -1,0 +1,145 @@
+#pragma once
+// Incompressible Navier–Stokes on the staggered grid of solver/grid (MODEL.md §3, eq 1–2, 8–10),
+// nondimensional with d_m and U_m (Re = U_m d_m / ν). One FluidSolver owns the fluid state of
+// this rank's slab: velocity at faces, pressure at cell centres, the AB2 history, the Poisson
+// solver. Nothing here knows about hearts: coupling/ adds forces through the body-force hook.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "solver/fluid/pressure/poisson.h"
+#include "solver/grid/grid.h"
+
+namespace systole::fluid {
+
+enum class WallKind { no_slip, free_slip };
+// One z wall. no_slip: u = (velocity_x, velocity_y, 0) on the wall (a moving wall drives
+// Couette flow); free_slip: ∂u/∂z = ∂v/∂z = 0, w = 0 (ours: verification of periodic flows).
+struct Wall {
+  WallKind kind = WallKind::no_slip;
+  double velocity_x = 0, velocity_y = 0;  // nondimensional, no_slip only
+};
+
+// An axis-aligned box of the Darcy sink (ours: the seed's region is "near the end of the
+// thoracic aorta"; coupling/ may pass several boxes). Nondimensional coordinates.
+struct DarcyRegion {
+  double x_min = 0, x_max = 0, y_min = 0, y_max = 0, z_min = 0, z_max = 0;
+};
+
+// Parameters, nondimensional unless the name says otherwise. Checked by validate().
+struct FluidParameters {
+  double reynolds = 3000;           // Re = U_m d_m / ν, (0, 1e7]; seed 3000
+  double cfl = 0.2;                 // target CFL number, (0, 1]; seed 0.2
+  double max_dt = 0.0025;           // largest step, > 0 (0.1 ms at d_m/U_m = 40 ms)
+  bool adaptive_dt = true;          // false: every step is max_dt (convergence studies)
+  double viscous_safety = 0.5;      // Δt ≤ viscous_safety/(ν Σ 4/Δ²), (0, 1] (ours)
+  double darcy_permeability = 0.001;        // k of the sink −u/k, > 0; seed 0.001
+  std::vector<DarcyRegion> darcy_regions;   // where the sink acts; empty: nowhere
+  Wall bottom_wall, top_wall;
+  std::string viscosity_model = "newtonian";  // known: newtonian
+  double time_scale_s = 0.04;       // d_m/U_m, only to report times in seconds
+  double abort_cfl = 1.0;           // realised CFL above which a step is declared unstable (ours)
+  double abort_energy_growth = 10;  // kinetic-energy ratio per step declared unstable (ours)
+};
+
+// Throws InputError naming the field, its value and the allowed range.
+void validate(const FluidParameters& p, const grid::Grid& g);
+
+struct Velocity {
+  explicit Velocity(const grid::Slabs& s) : u(s), v(s), w(s) {}
+  grid::XFaceField u;
+  grid::YFaceField v;
+  grid::ZFaceField w;
+};
+
+struct StepContext {
+  double time = 0;  // t_n, the start of the step
+  double dt = 0;    // Δt of the step
+  long step = 0;    // n (steps taken before this one)
+};
+// The body-force hook (eq 8): called once per step with the provisional velocity û (halos
+// valid, wall conditions applied) and f zeroed; it adds its force density to f on this rank's
+// interior faces. The step then sets u* = û + Δt f before the projection. A prescribed f(t)
+// should be evaluated at t_n + Δt/2 to keep second order in time. Collective if it wants.
+using BodyForce = std::function<void(const StepContext&, const Velocity& u_hat, Velocity& f)>;
+
+struct FlowDiagnostics {
+  double kinetic_energy = 0;   // volume mean of ½|u|²
+  double dissipation = 0;      // ν × volume mean of |∇u|² (discrete, wall differences included)
+  double max_divergence = 0;   // max |∇·u| over cells
+  double max_speed = 0;        // max(|u|,|v|,|w|) over faces
+};
+
+class FluidSolver {
+ public:
+  // Validates, builds the Poisson solver (its constructor self-test included); the fluid is
+  // at rest, t = 0. Collective on slabs.comm().
+  FluidSolver(const grid::Slabs& slabs, FluidParameters parameters);
+  ~FluidSolver();
+
+  // Sets u(x,y,z) (each component sampled at its own faces), projects it onto the discretely
+  // divergence-free fields, zeroes p and the AB2 history, keeps t. Collective.
+  using VelocityFunction = std::function<double(double x, double y, double z)>;
+  void set_velocity(const VelocityFunction& u, const VelocityFunction& v, const VelocityFunction& w);
+  void set_body_force(BodyForce force);
+  void set_time(double t) { time_ = t; }
+
+  // One step of eq 1–2, 8–10; returns the Δt taken (never more than t_limit − t). Throws
+  // InstabilityError ("fluid", place, time) on non-finite values, a realised CFL above
+  // abort_cfl or a kinetic-energy jump above abort_energy_growth; the state is then garbage.
+  double advance(double t_limit = 1e300);
+  // Steps until t_end (the last step shortened to land on it). Returns the steps taken.
+  long advance_to(double t_end);
+
+  FlowDiagnostics diagnostics() const;  // collective
+  // Volume flux ∫u dy dz through every x-face plane i (global, size nx): equal for all i
+  // when mass is conserved. Collective.
+  std::vector<double> volume_flux_x() const;
+
+  // Checkpoint of the whole state (velocity, pressure, AB2 history, time, step, last Δt) in
+  // HDF5; restore makes the continued run equal a straight run bitwise. Collective.
+  void write_checkpoint(const std::filesystem::path& file) const;
+  void restore_checkpoint(const std::filesystem::path& file);
+  // Velocity, pressure and vorticity at cell centres (+ XDMF sidecar). Collective.
+  void write_fields(const std::filesystem::path& h5_file) const;
+
+  const Velocity& velocity() const { return vel_; }
+  const grid::CellField& pressure() const { return p_; }
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  double last_dt() const { return dt_prev_; }
+  const FluidParameters& parameters() const { return par_; }
+  const grid::Slabs& slabs() const { return slabs_; }
+  const PoissonSolver& poisson() const { return *poisson_; }
+  std::size_t bytes_allocated() const;
+  std::vector<std::string> warnings() const { return poisson_->warnings(); }
+
+ private:
+  void apply_velocity_boundary_conditions(Velocity& vel) const;
+  double choose_time_step(double t_limit) const;
+  void compute_explicit_terms();                    // H = −∇·(uu) + Re⁻¹∇²u   (eq 1–2)
+  void predict(double dt, double gamma, double rho);  // û = u + Δt(γH + ρH') − αΔt∇p
+  void add_body_force(double dt);                   // u* = û + Δt f            (eq 8)
+  void apply_darcy_sink(double dt);                 // u* ← u*/(1 + Δt/k) in the region (ours)
+  void project(double dt);                          // ∇²φ = ∇·u*/(αΔt), u = u* − αΔt∇φ (eq 9)
+  void update_pressure();                           // p ← p + φ                (eq 10)
+  void check_stability(double dt);
+
+  const grid::Slabs& slabs_;
+  FluidParameters par_;
+  std::unique_ptr<PoissonSolver> poisson_;
+  Velocity vel_;
+  grid::CellField p_, phi_, rhs_;
+  std::unique_ptr<Velocity> h_, h_prev_;  // explicit terms at n and n−1
+  std::unique_ptr<Velocity> force_;       // allocated when a body force is set
+  BodyForce body_force_;
+  double time_ = 0, dt_prev_ = 0;
+  long steps_ = 0;
+  bool have_history_ = false;
+  double kinetic_energy_ = 0;
+  double max_u_ = 0, max_v_ = 0, max_w_ = 0;  // over faces, after the last step
+};
+
+}  // namespace systole::fluid

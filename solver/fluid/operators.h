@@ -1,0 +1,74 @@
+#pragma once
+// Second-order MAC difference operators, named for the location of their result
+// (ARCHITECTURE.md rule 6). All act on this rank's interior and read one halo layer; the
+// caller has exchanged halos and applied wall conditions. The discrete Laplacian of the
+// pressure solver equals divergence ∘ gradient, which is what makes the projection exact.
+#include <algorithm>
+#include <cmath>
+
+#include "solver/grid/grid.h"
+
+namespace systole::fluid {
+
+// div_at_cell = (u(i+1)−u(i))/Δx + (v(j+1)−v(j))/Δy + (w(k+1)−w(k))/Δz, interior cells.
+inline void divergence_at_cell(const grid::Grid& g, const grid::XFaceField& u, const grid::YFaceField& v,
+                               const grid::ZFaceField& w, double scale, grid::CellField& out) {
+  const double idx = scale / g.dx(), idy = scale / g.dy(), idz = scale / g.dz();
+  const auto sj = u.stride_j(), sk = u.stride_k();
+  for (int k = 0; k < u.k_count(); ++k)
+    for (int j = 0; j < u.ny(); ++j) {
+      const auto row = u.index(0, j, k);
+      const double* pu = u.data() + row;
+      const double* pv = v.data() + row;
+      const double* pw = w.data() + row;
+      double* po = out.data() + row;
+      for (int i = 0; i < u.nx(); ++i)
+        po[i] = (pu[i + 1] - pu[i]) * idx + (pv[i + sj] - pv[i]) * idy + (pw[i + sk] - pw[i]) * idz;
+    }
+}
+
+// Largest |div| over this rank's cells (local; reduce over ranks for the global value).
+inline double max_abs_divergence_local(const grid::Grid& g, const grid::XFaceField& u,
+                                       const grid::YFaceField& v, const grid::ZFaceField& w) {
+  const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
+  const auto sj = u.stride_j(), sk = u.stride_k();
+  double m = 0;
+  for (int k = 0; k < u.k_count(); ++k)
+    for (int j = 0; j < u.ny(); ++j) {
+      const auto row = u.index(0, j, k);
+      const double* pu = u.data() + row;
+      const double* pv = v.data() + row;
+      const double* pw = w.data() + row;
+      for (int i = 0; i < u.nx(); ++i)
+        m = std::max(m, std::abs((pu[i + 1] - pu[i]) * idx + (pv[i + sj] - pv[i]) * idy +
+                                 (pw[i + sk] - pw[i]) * idz));
+    }
+  return m;
+}
+
+// u −= c ∂φ/∂x at x-faces, v −= c ∂φ/∂y at y-faces, w −= c ∂φ/∂z at z-faces (interior z-faces
+// only: the wall faces k = 0 and nz keep their prescribed value). φ needs its halos.
+inline void subtract_gradient_at_faces(const grid::Slabs& s, const grid::CellField& phi, double c,
+                                       grid::XFaceField& u, grid::YFaceField& v, grid::ZFaceField& w) {
+  const grid::Grid& g = s.grid();
+  const double cx = c / g.dx(), cy = c / g.dy(), cz = c / g.dz();
+  const auto sj = phi.stride_j(), sk = phi.stride_k();
+  for (int k = 0; k < u.k_count(); ++k) {
+    const bool wall_face = (s.k_begin() + k == 0);
+    for (int j = 0; j < u.ny(); ++j) {
+      const auto row = u.index(0, j, k);
+      const double* pp = phi.data() + row;
+      double* pu = u.data() + row;
+      double* pv = v.data() + row;
+      double* pw = w.data() + row;
+      for (int i = 0; i < u.nx(); ++i) {
+        pu[i] -= cx * (pp[i] - pp[i - 1]);
+        pv[i] -= cy * (pp[i] - pp[i - sj]);
+      }
+      if (!wall_face)
+        for (int i = 0; i < u.nx(); ++i) pw[i] -= cz * (pp[i] - pp[i - sk]);
+    }
+  }
+}
+
+}  // namespace systole::fluid

@@ -1,0 +1,103 @@
+#include "solver/grid/grid.h"
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "solver/core/errors.h"
+
+namespace systole::grid {
+
+const char* to_string(Location location) {
+  switch (location) {
+    case Location::cell: return "cell centre";
+    case Location::x_face: return "x-face";
+    case Location::y_face: return "y-face";
+    case Location::z_face: return "z-face";
+  }
+  return "?";
+}
+
+namespace {
+void require_cells(const char* name, int n) {
+  if (n < 2) {
+    std::ostringstream m;
+    m << "grid." << name << " = " << n << " is out of range [2, 2^20] (cells)";
+    throw InputError(m.str());
+  }
+}
+void require_length(const char* name, double l) {
+  if (!(l > 0) || !std::isfinite(l)) {
+    std::ostringstream m;
+    m << "grid." << name << " = " << l << " must be a positive finite length (nondimensional)";
+    throw InputError(m.str());
+  }
+}
+}  // namespace
+
+Grid::Grid(const BoxSpec& spec) : spec_(spec) {
+  require_cells("nx", spec.nx);
+  require_cells("ny", spec.ny);
+  require_cells("nz", spec.nz);
+  require_length("lx", spec.lx);
+  require_length("ly", spec.ly);
+  require_length("lz", spec.lz);
+}
+
+Range block_range(int n, int parts, int p) {
+  const int base = n / parts, extra = n % parts;
+  return {p * base + (p < extra ? p : extra), base + (p < extra ? 1 : 0)};
+}
+
+Slabs::Slabs(const Grid& grid, MPI_Comm comm) : grid_(grid) {
+  MPI_Comm_dup(comm, &comm_);
+  MPI_Comm_rank(comm_, &rank_);
+  MPI_Comm_size(comm_, &size_);
+  if (grid.nz() < size_ || grid.ny() < size_) {
+    MPI_Comm_free(&comm_);
+    std::ostringstream m;
+    m << "grid: nz = " << grid.nz() << " and ny = " << grid.ny() << " must each be at least the "
+      << "number of MPI ranks (" << size_ << "): every rank owns a z-slab and a y-slab";
+    throw InputError(m.str());
+  }
+  z_ = block_range(grid.nz(), size_, rank_);
+}
+
+Slabs::~Slabs() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (comm_ != MPI_COMM_NULL && !finalized) MPI_Comm_free(&comm_);
+}
+
+void fill_periodic_xy(double* data, int nx, int ny, int k_count) {
+  const std::ptrdiff_t sx = nx + 2, sxy = sx * (ny + 2);
+  for (int k = -1; k <= k_count; ++k) {
+    double* p = data + sxy * (k + 1);
+    for (int j = 0; j < ny; ++j) {
+      double* row = p + sx * (j + 1);
+      row[0] = row[nx];       // i = -1  ← i = nx-1
+      row[nx + 1] = row[1];   // i = nx  ← i = 0
+    }
+    std::memcpy(p, p + sx * ny, sizeof(double) * sx);              // j = -1 ← j = ny-1
+    std::memcpy(p + sx * (ny + 1), p + sx, sizeof(double) * sx);   // j = ny ← j = 0
+  }
+}
+
+void exchange_halos(double* data, int nx, int ny, int k_count, const Slabs& slabs) {
+  const std::ptrdiff_t sxy = static_cast<std::ptrdiff_t>(nx + 2) * (ny + 2);
+  const int count = static_cast<int>(sxy);
+  if (slabs.size() > 1) {
+    double* first = data + sxy * 1;              // local k = 0
+    double* last = data + sxy * k_count;         // local k = k_count-1
+    double* halo_below = data;                   // local k = -1
+    double* halo_above = data + sxy * (k_count + 1);
+    // Upward: my last plane → the halo below of the rank above.
+    MPI_Sendrecv(last, count, MPI_DOUBLE, slabs.rank_above(), 11, halo_below, count, MPI_DOUBLE,
+                 slabs.rank_below(), 11, slabs.comm(), MPI_STATUS_IGNORE);
+    MPI_Sendrecv(first, count, MPI_DOUBLE, slabs.rank_below(), 12, halo_above, count, MPI_DOUBLE,
+                 slabs.rank_above(), 12, slabs.comm(), MPI_STATUS_IGNORE);
+  }
+  fill_periodic_xy(data, nx, ny, k_count);
+}
+
+}  // namespace systole::grid

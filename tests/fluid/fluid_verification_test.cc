@@ -1,0 +1,212 @@
+// Verification tier: observed orders asserted as numbers, exact solutions, round-off
+// divergence after every step, mass conservation, energy balance, restart equivalence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+
+#include "solver/fluid/fluid.h"
+#include "solver/fluid/verification_cases.h"
+
+namespace systole::fluid {
+namespace {
+constexpr double kPi = std::numbers::pi;
+
+RunResult run(FluidCaseSpec spec) { return run_verification_case(spec, MPI_COMM_WORLD); }
+void print(const char* what, double value) {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0) std::printf("  [measured] %s = %.6g\n", what, value);
+}
+
+TEST(TaylorGreen2D, SecondOrderInSpace) {
+  double previous = 0, order = 0;
+  for (int n : {16, 32, 64}) {
+    FluidCaseSpec s;
+    s.case_name = VerificationCase::taylor_green_2d;
+    s.nx = s.ny = n;
+    s.nz = 2;
+    s.reynolds = 100;
+    s.end_time = 1.0;
+    s.cfl = 0.1;
+    s.samples = 2;
+    const RunResult r = run(s);
+    const double e = r.metrics.at("error_l2_relative");
+    EXPECT_LT(r.metrics.at("max_divergence_all_steps"), 1e-11);
+    EXPECT_LT(r.metrics.at("mass_flux_relative_variation"), 1e-11);
+    if (previous > 0) {
+      order = std::log2(previous / e);
+      print(("taylor_green_2d space order " + std::to_string(n / 2) + "->" + std::to_string(n)).c_str(), order);
+      EXPECT_GE(order, 1.9);
+    }
+    print(("taylor_green_2d L2 error N=" + std::to_string(n)).c_str(), e);
+    previous = e;
+  }
+}
+
+// Time order on a fixed grid against a fine-Δt reference (Richardson on one grid): Womersley
+// flow (an oscillating body force) has a real time dependence, unlike the Taylor–Green decay.
+std::vector<double> womersley_u(double dt, double t_end) {
+  const grid::Grid g({2, 2, 32, 1, 1, 2});
+  const grid::Slabs s(g, MPI_COMM_WORLD);
+  FluidParameters p;
+  p.reynolds = 100;
+  p.adaptive_dt = false;
+  p.max_dt = dt;
+  FluidSolver f(s, p);
+  const double omega = 16.0 / 100;  // Wo = 4
+  f.set_body_force([omega](const StepContext& c, const Velocity&, Velocity& force) {
+    force.u.fill(std::cos(omega * (c.time + 0.5 * c.dt)));
+  });
+  f.set_velocity([](double, double, double z) { return std::sin(kPi * z / 2); },
+                 [](double, double, double) { return 0.0; }, [](double, double, double) { return 0.0; });
+  f.advance_to(t_end);
+  std::vector<double> out;
+  for (int k = 0; k < f.velocity().u.k_count(); ++k) out.push_back(f.velocity().u(0, 0, k));
+  return out;
+}
+
+TEST(Womersley, SecondOrderInTime) {
+  const double t_end = 4.0;
+  const auto ref = womersley_u(0.04 / 32, t_end);
+  double previous = 0;
+  for (double dt : {0.04, 0.02, 0.01}) {
+    const auto u = womersley_u(dt, t_end);
+    double e = 0;
+    for (std::size_t k = 0; k < u.size(); ++k) e = std::max(e, std::abs(u[k] - ref[k]));
+    double eg = 0;
+    MPI_Allreduce(&e, &eg, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    if (previous > 0) {
+      const double order = std::log2(previous / eg);
+      print(("time order dt=" + std::to_string(dt)).c_str(), order);
+      EXPECT_GT(order, 1.85);
+      EXPECT_LT(order, 2.3);
+    }
+    previous = eg;
+  }
+}
+
+TEST(Poiseuille, SteadyProfileSecondOrder) {
+  double previous = 0;
+  for (int n : {16, 32}) {
+    FluidCaseSpec s;
+    s.case_name = VerificationCase::poiseuille;
+    s.nx = s.ny = 2;
+    s.nz = n;
+    s.reynolds = 10;
+    s.end_time = 14;
+    s.max_dt = 1;
+    s.samples = 2;
+    const RunResult r = run(s);
+    const double e = r.metrics.at("error_linf_relative");
+    print(("poiseuille Linf error nz=" + std::to_string(n)).c_str(), e);
+    EXPECT_LT(e, 1.1 / (n * n));  // the error is the wall closure's, Δz² exactly
+    EXPECT_LT(r.metrics.at("mass_flux_relative_variation"), 1e-12);
+    EXPECT_LT(r.metrics.at("max_divergence_all_steps"), 1e-11);
+    if (previous > 0) {
+      print("poiseuille order", std::log2(previous / e));
+      EXPECT_GE(std::log2(previous / e), 1.9);
+    }
+    previous = e;
+  }
+}
+
+TEST(Couette, LinearProfileIsExact) {
+  FluidCaseSpec s;
+  s.case_name = VerificationCase::couette;
+  s.nx = s.ny = 2;
+  s.nz = 16;
+  s.reynolds = 10;
+  s.end_time = 14;
+  s.max_dt = 1;
+  s.samples = 2;
+  const RunResult r = run(s);
+  print("couette Linf error", r.metrics.at("error_linf_relative"));
+  EXPECT_LT(r.metrics.at("error_linf_relative"), 1e-5);  // the decaying start-up transient
+}
+
+TEST(Womersley, MatchesTheAnalyticSolutionWithinOnePercent) {
+  for (auto [wo, nz] : {std::pair{4.0, 32}, std::pair{12.0, 96}}) {
+    FluidCaseSpec s;
+    s.case_name = VerificationCase::womersley;
+    s.womersley_number = wo;
+    s.nx = s.ny = 2;
+    s.nz = nz;
+    s.reynolds = 100;
+    const double period = 2 * kPi / (wo * wo / 100);
+    s.end_time = 2 * period;
+    s.max_dt = 1;
+    s.samples = 40;
+    const RunResult r = run(s);
+    const double e = r.metrics.at("error_linf_max_over_samples_relative");
+    print(("womersley Wo=" + std::to_string(wo) + " max error / peak").c_str(), e);
+    EXPECT_LT(e, 0.01);
+    EXPECT_LT(r.metrics.at("max_divergence_all_steps"), 1e-11);
+  }
+}
+
+TEST(TaylorGreen3D, EnergyBalanceAndRoundOffDivergence) {
+  FluidCaseSpec s;
+  s.case_name = VerificationCase::taylor_green_3d;
+  s.nx = s.ny = 32;
+  s.nz = 16;
+  s.reynolds = 100;
+  s.end_time = 2;
+  s.samples = 4;
+  const RunResult r = run(s);
+  print("taylor_green_3d energy balance relative error", r.metrics.at("energy_balance_relative_error"));
+  print("taylor_green_3d max divergence", r.metrics.at("max_divergence_all_steps"));
+  EXPECT_LT(r.metrics.at("energy_balance_relative_error"), 2e-3);
+  EXPECT_LT(r.metrics.at("max_divergence_all_steps"), 1e-11);
+  const auto& ke = r.series[1].values;
+  for (std::size_t i = 1; i < ke.size(); ++i) EXPECT_LT(ke[i], ke[i - 1]);
+}
+
+TEST(Checkpoint, RestartEqualsAStraightRunBitwise) {
+  const grid::Grid g({16, 16, 8, 2 * kPi, 2 * kPi, kPi});
+  const grid::Slabs s(g, MPI_COMM_WORLD);
+  FluidParameters p;
+  p.reynolds = 200;
+  p.bottom_wall.kind = p.top_wall.kind = WallKind::free_slip;
+  auto u0 = [](double x, double y, double z) { return std::sin(x) * std::cos(y) * std::cos(z); };
+  auto v0 = [](double x, double y, double z) { return -std::cos(x) * std::sin(y) * std::cos(z); };
+  auto w0 = [](double, double, double) { return 0.0; };
+  FluidSolver straight(s, p);
+  straight.set_velocity(u0, v0, w0);
+  for (int n = 0; n < 20; ++n) straight.advance();
+
+  const auto file = std::filesystem::temp_directory_path() / "systole_fluid_checkpoint_test.h5";
+  {
+    FluidSolver first(s, p);
+    first.set_velocity(u0, v0, w0);
+    for (int n = 0; n < 10; ++n) first.advance();
+    first.write_checkpoint(file);
+  }
+  FluidSolver second(s, p);
+  second.restore_checkpoint(file);
+  for (int n = 0; n < 10; ++n) second.advance();
+  EXPECT_EQ(second.time(), straight.time());
+  EXPECT_EQ(second.steps(), straight.steps());
+  const Velocity &a = straight.velocity(), &b = second.velocity();
+  long differences = 0;
+  for (int k = 0; k < a.u.k_count(); ++k)
+    for (int j = 0; j < 16; ++j)
+      for (int i = 0; i < 16; ++i)
+        differences += (a.u(i, j, k) != b.u(i, j, k)) + (a.v(i, j, k) != b.v(i, j, k)) +
+                       (a.w(i, j, k) != b.w(i, j, k)) + (straight.pressure()(i, j, k) != second.pressure()(i, j, k));
+  EXPECT_EQ(differences, 0);
+  // Field output: HDF5 + XDMF side by side.
+  const auto fields = std::filesystem::temp_directory_path() / "systole_fluid_fields_test.h5";
+  second.write_fields(fields);
+  EXPECT_TRUE(std::filesystem::exists(fields));
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0) {
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(fields).replace_extension(".xmf")));
+  }
+}
+
+}  // namespace
+}  // namespace systole::fluid
