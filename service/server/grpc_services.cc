@@ -92,4 +92,37 @@ grpc::Status WorkerService::UploadArtifact(grpc::ServerContext*, grpc::ServerRea
   });
 }
 
+grpc::Status CampaignsGrpcService::SubmitCampaign(grpc::ServerContext*, const v1::SubmitCampaignRequest* request,
+                                                  v1::SubmitCampaignResponse* response) {
+  return guarded([&] { *response = campaigns_.submit(*request); });
+}
+grpc::Status CampaignsGrpcService::GetCampaign(grpc::ServerContext*, const v1::GetCampaignRequest* request,
+                                               v1::GetCampaignResponse* response) {
+  return guarded([&] { *response = campaigns_.get(request->id()); });
+}
+grpc::Status CampaignsGrpcService::WatchCampaign(grpc::ServerContext* context, const v1::WatchCampaignRequest* request,
+                                                 grpc::ServerWriter<v1::GetCampaignResponse>* writer) {
+  return guarded([&] {
+    campaigns_.watch(
+        request->id(), [&](const v1::GetCampaignResponse& r) { return writer->Write(r); },
+        [&] { return !context->IsCancelled(); });
+  });
+}
+grpc::Status CampaignsGrpcService::CancelCampaign(grpc::ServerContext*, const v1::CancelCampaignRequest* request,
+                                                  v1::Campaign* response) {
+  return guarded([&] { *response = campaigns_.cancel(request->id()); });
+}
+grpc::Status CampaignsGrpcService::RetryFailed(grpc::ServerContext*, const v1::RetryFailedRequest* request,
+                                               v1::Campaign* response) {
+  return guarded([&] { *response = campaigns_.retry_failed(request->id()); });
+}
+grpc::Status CampaignsGrpcService::ListCampaigns(grpc::ServerContext*, const v1::ListCampaignsRequest* request,
+                                                 v1::ListCampaignsResponse* response) {
+  return guarded([&] { *response = campaigns_.list(*request); });
+}
+grpc::Status CampaignsGrpcService::GetCampaignSamples(grpc::ServerContext*, const v1::GetCampaignSamplesRequest* request,
+                                                      v1::GetCampaignSamplesResponse* response) {
+  return guarded([&] { *response = campaigns_.samples(request->id()); });
+}
+
 }  // namespace systole::service

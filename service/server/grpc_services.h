@@ -1,7 +1,9 @@
 #pragma once
 // gRPC front ends of JobService: systole.v1.Simulation (public) and systole.v1.WorkerApi.
 // Each RPC is a one-line call into JobService wrapped by guarded(), which maps errors to status.
+#include "service/server/campaign_service.h"
 #include "service/server/job_service.h"
+#include "systole/v1/campaign.grpc.pb.h"
 #include "systole/v1/service.grpc.pb.h"
 #include "systole/v1/worker.grpc.pb.h"
 
@@ -37,6 +39,23 @@ class WorkerService final : public v1::WorkerApi::Service {
 
  private:
   JobService& jobs_;
+};
+
+class CampaignsGrpcService final : public v1::Campaigns::Service {
+ public:
+  explicit CampaignsGrpcService(CampaignService& campaigns) : campaigns_(campaigns) {}
+  grpc::Status SubmitCampaign(grpc::ServerContext*, const v1::SubmitCampaignRequest*, v1::SubmitCampaignResponse*) override;
+  grpc::Status GetCampaign(grpc::ServerContext*, const v1::GetCampaignRequest*, v1::GetCampaignResponse*) override;
+  grpc::Status WatchCampaign(grpc::ServerContext*, const v1::WatchCampaignRequest*,
+                             grpc::ServerWriter<v1::GetCampaignResponse>*) override;
+  grpc::Status CancelCampaign(grpc::ServerContext*, const v1::CancelCampaignRequest*, v1::Campaign*) override;
+  grpc::Status RetryFailed(grpc::ServerContext*, const v1::RetryFailedRequest*, v1::Campaign*) override;
+  grpc::Status ListCampaigns(grpc::ServerContext*, const v1::ListCampaignsRequest*, v1::ListCampaignsResponse*) override;
+  grpc::Status GetCampaignSamples(grpc::ServerContext*, const v1::GetCampaignSamplesRequest*,
+                                  v1::GetCampaignSamplesResponse*) override;
+
+ private:
+  CampaignService& campaigns_;
 };
 
 }  // namespace systole::service

@@ -86,7 +86,9 @@ int main(int argc, char** argv) {
                  store.count(std::nullopt), store.count(store::JobState::kQueued),
                  store.count(store::JobState::kRunning));
 
+    service::CampaignService campaigns(store, notifier, {fs::path(data_dir), lease_ms, 3});
     service::SimulationService simulation(jobs);
+    service::CampaignsGrpcService campaigns_api(campaigns);
     service::WorkerService worker_api(jobs);
     grpc::EnableDefaultHealthCheckService(true);
     grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -95,6 +97,7 @@ int main(int argc, char** argv) {
     builder.AddListeningPort(grpc_listen, grpc::InsecureServerCredentials(), &grpc_port);
     builder.RegisterService(&simulation);
     builder.RegisterService(&worker_api);
+    builder.RegisterService(&campaigns_api);
     builder.SetMaxReceiveMessageSize(max_request_mb << 20);
     builder.SetMaxSendMessageSize(64 << 20);
     std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
@@ -108,7 +111,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<service::RestGateway> rest;
     if (http_listen != "off") {
       const auto [host, port] = split_host_port(http_listen, "--http-listen");
-      rest = std::make_unique<service::RestGateway>(jobs, host, port, static_cast<size_t>(max_request_mb) << 20);
+      rest = std::make_unique<service::RestGateway>(jobs, campaigns, host, port, static_cast<size_t>(max_request_mb) << 20);
       spdlog::info("REST listening on {}:{}", host, rest->port());
     }
 

@@ -75,8 +75,9 @@ int http_status_for(grpc::StatusCode code) {
   }
 }
 
-RestGateway::RestGateway(JobService& jobs, const std::string& host, int port, size_t max_body_bytes)
-    : jobs_(jobs), server_(std::make_unique<httplib::Server>()) {
+RestGateway::RestGateway(JobService& jobs, CampaignService& campaigns, const std::string& host, int port,
+                         size_t max_body_bytes)
+    : jobs_(jobs), campaigns_(campaigns), server_(std::make_unique<httplib::Server>()) {
   auto& s = *server_;
   s.new_task_queue = [] { return new httplib::ThreadPool(32); };
   s.set_payload_max_length(max_body_bytes);
@@ -174,6 +175,61 @@ RestGateway::RestGateway(JobService& jobs, const std::string& host, int port, si
                                  in->read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
                                  return sink.write(buffer.data(), static_cast<size_t>(in->gcount()));
                                });
+    });
+  });
+
+  // Campaigns.
+  s.Post("/v1/campaigns", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] {
+      v1::SubmitCampaignRequest request;
+      parse_body(req.body, &request);
+      const auto response = campaigns_.submit(request);
+      res.status = response.created() ? 201 : 200;
+      res.set_content(to_json(response), "application/json");
+    });
+  });
+  s.Get("/v1/campaigns", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] {
+      v1::ListCampaignsRequest request;
+      request.set_page_size(query_int(req, "page_size", 0));
+      if (req.has_param("page_token")) request.set_page_token(req.get_param_value("page_token"));
+      res.set_content(to_json(campaigns_.list(request)), "application/json");
+    });
+  });
+  s.Get(R"(/v1/campaigns/([^/:]+))", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] { res.set_content(to_json(campaigns_.get(req.matches[1])), "application/json"); });
+  });
+  s.Get(R"(/v1/campaigns/([^/:]+)/samples)", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] { res.set_content(to_json(campaigns_.samples(req.matches[1])), "application/json"); });
+  });
+  s.Post(R"(/v1/campaigns/([^/:]+):cancel)", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] { res.set_content(to_json(campaigns_.cancel(req.matches[1])), "application/json"); });
+  });
+  s.Post(R"(/v1/campaigns/([^/:]+):retry)", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] { res.set_content(to_json(campaigns_.retry_failed(req.matches[1])), "application/json"); });
+  });
+  s.Get(R"(/v1/campaigns/([^/:]+):watch)", [this](const httplib::Request& req, httplib::Response& res) {
+    handle(res, [&] {
+      const std::string id = req.matches[1];
+      (void)campaigns_.get(id);  // a clean 404 before the stream starts
+      const bool sse = req.get_header_value("Accept").find("text/event-stream") != std::string::npos;
+      res.set_chunked_content_provider(sse ? "text/event-stream" : "application/x-ndjson",
+                                       [this, id, sse](size_t, httplib::DataSink& sink) {
+                                         try {
+                                           campaigns_.watch(
+                                               id,
+                                               [&](const v1::GetCampaignResponse& r) {
+                                                 const std::string line = sse ? "data: " + to_json(r) + "\n\n"
+                                                                              : to_json(r) + "\n";
+                                                 return sink.is_writable() && sink.write(line.data(), line.size());
+                                               },
+                                               [&] { return sink.is_writable(); });
+                                         } catch (const std::exception& e) {
+                                           spdlog::warn("REST campaign watch of {} ended: {}", id, e.what());
+                                         }
+                                         sink.done();
+                                         return true;
+                                       });
     });
   });
 

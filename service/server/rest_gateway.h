@@ -10,11 +10,18 @@
 //                                                 Accept: text/event-stream
 //   GET  /v1/jobs/{id}/result              GetResult
 //   GET  /v1/jobs/{id}/artifacts/{name}    DownloadArtifact (raw bytes, X-Sha256 header)
+//   POST /v1/campaigns                     SubmitCampaign (201 / 200)
+//   GET  /v1/campaigns                     ListCampaigns
+//   GET  /v1/campaigns/{id}                GetCampaign (with statistics)
+//   GET  /v1/campaigns/{id}/samples        GetCampaignSamples
+//   POST /v1/campaigns/{id}:cancel | :retry
+//   GET  /v1/campaigns/{id}:watch          WatchCampaign as NDJSON (or SSE)
 //   GET  /healthz                          200 "SERVING"
 #include <memory>
 #include <string>
 #include <thread>
 
+#include "service/server/campaign_service.h"
 #include "service/server/job_service.h"
 
 namespace httplib {
@@ -26,7 +33,8 @@ namespace systole::service {
 class RestGateway {
  public:
   // Binds host:port (port 0 picks a free one) and starts serving on a background thread.
-  RestGateway(JobService& jobs, const std::string& host, int port, size_t max_body_bytes);
+  RestGateway(JobService& jobs, CampaignService& campaigns, const std::string& host, int port,
+              size_t max_body_bytes);
   ~RestGateway();  // stops and joins
   RestGateway(const RestGateway&) = delete;
   RestGateway& operator=(const RestGateway&) = delete;
@@ -34,6 +42,7 @@ class RestGateway {
 
  private:
   JobService& jobs_;
+  CampaignService& campaigns_;
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
   std::thread thread_;
