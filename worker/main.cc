@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <condition_variable>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -67,7 +68,11 @@ class JobSession {
     thread_ = std::thread([this] { beat(); });
   }
   ~JobSession() {
-    done_ = true;
+    {
+      std::lock_guard lock(mu_);
+      done_ = true;
+    }
+    wake_.notify_all();  // the beat thread must not hold up the next job
     thread_.join();
   }
   void set_progress(const ProgressReport& report) {
@@ -94,14 +99,14 @@ class JobSession {
   bool lease_lost() const { return lease_lost_.load(); }
 
  private:
+  // One heartbeat (with progress when there is new progress) per second until done.
   void beat() {
-    auto next = std::chrono::steady_clock::now();
+    std::unique_lock lock(mu_);
     while (!done_) {
-      if (std::chrono::steady_clock::now() >= next) {
-        send_heartbeat();
-        next = std::chrono::steady_clock::now() + std::chrono::milliseconds(1000);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (wake_.wait_for(lock, std::chrono::milliseconds(1000), [&] { return done_.load(); })) break;
+      lock.unlock();
+      send_heartbeat();
+      lock.lock();
     }
   }
   void send_heartbeat() {
@@ -143,7 +148,8 @@ class JobSession {
   bool fresh_progress_ = false;  // guarded by mu_
   std::atomic<bool> cancel_{false};
   std::atomic<bool> lease_lost_{false};
-  std::atomic<bool> done_{false};
+  std::atomic<bool> done_{false};  // written under mu_
+  std::condition_variable wake_;
   std::thread thread_;
 };
 
