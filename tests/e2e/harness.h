@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <random>
 #include <sstream>
 #include <string>
@@ -69,6 +70,8 @@ class ServerProcess {
   void start(int local_workers, int ranks, int lease_ms) {
     const fs::path ports = dir_ / "ports.json";
     fs::remove(ports);
+    std::cout.flush();  // the child must not inherit (and later flush) unwritten output
+    std::fflush(nullptr);
     pid_ = ::fork();
     if (pid_ == 0) {
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
