@@ -3,6 +3,7 @@
 //   systole status ID | list | watch ID | cancel ID | results ID [--json|--csv]
 //   systole download ID [--name NAME] [--out DIR]
 //   systole run SCENARIO.json [--set ...] [--out DIR]      submit + watch + download
+//   systole campaign submit|watch|status|results|retry|cancel|list   (client/campaign_cli.h)
 // The server address comes from --server or $SYSTOLE_SERVER (default 127.0.0.1:50051).
 #include <unistd.h>
 
@@ -18,6 +19,8 @@
 #include <google/protobuf/util/json_util.h>
 #include <grpcpp/grpcpp.h>
 
+#include "client/campaign_cli.h"
+#include "client/rpc.h"
 #include "proto/bridge/scenario_bridge.h"
 #include "service/server/sha256.h"
 #include "solver/core/errors.h"
@@ -28,11 +31,7 @@ using namespace systole;
 
 namespace {
 
-// A failed call: the message is what the user sees; the exit code says what kind.
-struct CliError : std::runtime_error {
-  CliError(const std::string& m, int code) : std::runtime_error(m), exit_code(code) {}
-  int exit_code;
-};
+using client::CliError;
 
 class Client {
  public:
@@ -42,28 +41,8 @@ class Client {
     stub_ = v1::Simulation::NewStub(grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), args));
   }
   v1::Simulation::Stub& stub() { return *stub_; }
-  std::unique_ptr<grpc::ClientContext> context(int timeout_s = 30) const {
-    auto c = std::make_unique<grpc::ClientContext>();
-    if (timeout_s > 0) c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(timeout_s));
-    return c;
-  }
-  void check(const grpc::Status& status) const {
-    if (status.ok()) return;
-    if (status.error_code() == grpc::StatusCode::UNAVAILABLE || status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED)
-      throw CliError("cannot reach systole-server at " + address_ + ": " + status.error_message() +
-                         "\n  is it running? start one with: build/bin/systole-server --local-workers 2"
-                         "\n  or point to another with --server HOST:PORT or SYSTOLE_SERVER",
-                     3);
-    throw CliError("error (" + code_name(status.error_code()) + "): " + status.error_message(), 2);
-  }
-  static std::string code_name(grpc::StatusCode code) {
-    static const char* names[] = {"OK", "CANCELLED", "UNKNOWN", "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
-                                  "NOT_FOUND", "ALREADY_EXISTS", "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
-                                  "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED", "INTERNAL",
-                                  "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
-    const int i = static_cast<int>(code);
-    return i >= 0 && i < 17 ? names[i] : std::to_string(i);
-  }
+  std::unique_ptr<grpc::ClientContext> context(int timeout_s = 30) const { return client::make_context(timeout_s); }
+  void check(const grpc::Status& status) const { client::check_status(status, address_); }
 
  private:
   std::string address_;
@@ -282,7 +261,9 @@ int main(int argc, char** argv) {
   add_submit_options(run_cmd);
   run_cmd->add_option("--out", out_dir, "directory for the artifacts (default results/<job id>)");
   run_cmd->add_flag("--quiet", quiet, "no progress output");
+  auto campaign = cli::add_campaign_commands(app);  // `systole campaign ...`: client/campaign_cli.cc
   CLI11_PARSE(app, argc, argv);
+  if (campaign->selected()) return campaign->run(server);
 
   try {
     Client client(server);

@@ -18,7 +18,9 @@
 #include "service/server/grpc_services.h"
 #include "service/server/local_workers.h"
 #include "service/server/rest_gateway.h"
+#include "service/server/umbridge_gateway.h"
 #include "solver/core/version.h"
+#include "solver/scene/scene.h"
 
 namespace fs = std::filesystem;
 using namespace systole;
@@ -49,6 +51,9 @@ int main(int argc, char** argv) {
   int ranks = 1;
   int64_t lease_ms = 15000;
   int max_request_mb = 4;
+  std::string umbridge_listen = "off";
+  std::string umbridge_preset;
+  double umbridge_timeout_s = 600;
   app.add_option("--listen", grpc_listen, "gRPC listen address (port 0: any free port)")->capture_default_str();
   app.add_option("--http-listen", http_listen, "REST listen address (port 0: any free port; 'off' disables)")
       ->capture_default_str();
@@ -64,7 +69,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-request-mb", max_request_mb, "largest accepted request")->check(CLI::Range(1, 1024))
       ->capture_default_str();
-  app.add_option("--port-file", port_file, "write {\"grpc\": port, \"http\": port} here once listening");
+  app.add_option("--umbridge-listen", umbridge_listen,
+                 "UM-Bridge model server address, e.g. 127.0.0.1:4242 (docs/umbridge.md; port 0: any free port; "
+                 "'off' disables)")
+      ->capture_default_str();
+  app.add_option("--umbridge-preset", umbridge_preset, "JSON file: the UM-Bridge model's default config");
+  app.add_option("--umbridge-timeout-s", umbridge_timeout_s, "longest a UM-Bridge Evaluate waits for its job")
+      ->check(CLI::Range(1.0, 86400.0))
+      ->capture_default_str();
+  app.add_option("--port-file", port_file,
+                 "write {\"grpc\": port, \"http\": port, \"umbridge\": port} here once listening");
   app.set_version_flag("--version", std::string(kVersion) + " (" + kGitRevision + ")");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ server %v");
@@ -115,6 +129,22 @@ int main(int argc, char** argv) {
       spdlog::info("REST listening on {}:{}", host, rest->port());
     }
 
+    std::unique_ptr<service::UmBridgeGateway> umbridge;
+    if (umbridge_listen != "off") {
+      const auto [host, port] = split_host_port(umbridge_listen, "--umbridge-listen");
+      nlohmann::json preset = nlohmann::json::object();
+      if (!umbridge_preset.empty()) {
+        std::ifstream in(umbridge_preset);
+        if (!in) throw std::runtime_error("--umbridge-preset: cannot read " + umbridge_preset);
+        preset = nlohmann::json::parse(in);
+      }
+      umbridge = std::make_unique<service::UmBridgeGateway>(
+          jobs, notifier, host, port, preset,
+          std::chrono::milliseconds(static_cast<int64_t>(umbridge_timeout_s * 1000)),
+          [](const std::string& name) { return scene::metric_names(name); });
+      spdlog::info("UM-Bridge listening on {}:{}", host, umbridge->port());
+    }
+
     std::atomic<bool> stopping{false};
     std::thread reaper([&] {
       while (!stopping) {
@@ -142,7 +172,8 @@ int main(int argc, char** argv) {
 
     if (!port_file.empty()) {
       const std::string tmp = port_file + ".tmp";
-      std::ofstream(tmp) << nlohmann::json{{"grpc", grpc_port}, {"http", rest ? rest->port() : 0}, {"pid", ::getpid()}}
+      std::ofstream(tmp) << nlohmann::json{{"grpc", grpc_port}, {"http", rest ? rest->port() : 0},
+                                 {"umbridge", umbridge ? umbridge->port() : 0}, {"pid", ::getpid()}}
                                 .dump()
                          << "\n";
       fs::rename(tmp, port_file);
@@ -153,6 +184,7 @@ int main(int argc, char** argv) {
     sigwait(&signals, &signal_number);
     spdlog::info("signal {}: shutting down", signal_number);
     stopping = true;
+    umbridge.reset();  // waiting Evaluates answer 503 first
     workers.reset();  // workers release their leases on SIGTERM
     rest.reset();
     server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));

@@ -239,7 +239,13 @@ RestGateway::RestGateway(JobService& jobs, CampaignService& campaigns, const std
     port_ = s.bind_to_port(host, port) ? port : -1;
   }
   if (port_ <= 0) throw std::runtime_error("REST: cannot listen on " + host + ":" + std::to_string(port));
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  thread_ = std::thread([this] {
+    server_->listen_after_bind();
+    listen_returned_ = true;
+  });
+  // httplib's stop() does nothing until the listen loop runs: wait for it, so that a gateway
+  // destroyed right after construction cannot hang in its destructor.
+  while (!server_->is_running() && !listen_returned_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
 }
 
 RestGateway::~RestGateway() {

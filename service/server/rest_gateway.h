@@ -17,6 +17,7 @@
 //   POST /v1/campaigns/{id}:cancel | :retry
 //   GET  /v1/campaigns/{id}:watch          WatchCampaign as NDJSON (or SSE)
 //   GET  /healthz                          200 "SERVING"
+#include <atomic>
 #include <memory>
 #include <string>
 #include <thread>
@@ -45,6 +46,7 @@ class RestGateway {
   CampaignService& campaigns_;
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
+  std::atomic<bool> listen_returned_{false};
   std::thread thread_;
 };
 

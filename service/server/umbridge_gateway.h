@@ -20,11 +20,10 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "service/server/job_service.h"
 
@@ -48,8 +47,7 @@ class UmBridgeGateway {
   // config's "timeout_s" says otherwise. Throws std::invalid_argument for a bad preset and
   // std::runtime_error if it cannot listen.
   UmBridgeGateway(JobService& jobs, ChangeNotifier& notifier, const std::string& host, int port,
-                  const nlohmann::json& preset, std::chrono::milliseconds timeout,
-                  MetricCatalog known_metrics = {});
+                  const nlohmann::json& preset, std::chrono::milliseconds timeout, MetricCatalog known_metrics = {});
   ~UmBridgeGateway();  // wakes waiting Evaluates (they answer 503), stops and joins
   UmBridgeGateway(const UmBridgeGateway&) = delete;
   UmBridgeGateway& operator=(const UmBridgeGateway&) = delete;
@@ -69,6 +67,7 @@ class UmBridgeGateway {
   std::chrono::milliseconds timeout_;
   MetricCatalog known_metrics_;
   std::atomic<bool> stopping_{false};
+  std::atomic<bool> listen_returned_{false};
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
   std::thread thread_;
