@@ -397,7 +397,7 @@ int main(int argc, char** argv) {
     ++jobs_done;
     if (max_jobs > 0 && jobs_done >= max_jobs) break;
     int stop = g_terminate ? 1 : 0;
-    MPI_Bcast(&stop, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    broadcast_int_idle(&stop, MPI_COMM_WORLD);  // ranks > 0 wait here while rank 0 uploads
     if (stop) break;
   }
   if (rank == 0) spdlog::info("worker {} stopping after {} jobs", worker_id, jobs_done);
