@@ -6,6 +6,7 @@
 #include <mpi.h>
 
 #include <chrono>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 
@@ -23,7 +24,8 @@ namespace {
 
 class ConsoleControl final : public scene::RunControl {
  public:
-  ConsoleControl(int rank, bool quiet) : rank_(rank), quiet_(quiet) {}
+  ConsoleControl(int rank, bool quiet, std::filesystem::path out) : rank_(rank), quiet_(quiet), out_(std::move(out)) {}
+  std::filesystem::path output_directory() override { return out_; }
   void on_progress(const ProgressReport& p) override {
     if (rank_ != 0 || quiet_) return;
     std::cerr << "beat " << p.beat << "/" << p.beats_total << "  t = " << std::fixed << std::setprecision(3)
@@ -39,6 +41,7 @@ class ConsoleControl final : public scene::RunControl {
  private:
   int rank_;
   bool quiet_;
+  std::filesystem::path out_;
 };
 
 }  // namespace
@@ -70,15 +73,15 @@ int main(int argc, char** argv) {
     } else {
       if (file.empty() || out_dir.empty()) throw InputError("usage: systole-solve SCENARIO.json --out DIR [--set path=value ...]");
       const config::Scenario scenario = bridge::validate(bridge::load_scenario_file(file, sets));
-      ConsoleControl control(rank, quiet);
+      ConsoleControl control(rank, quiet, out_dir);
       RunResult result = scene::run(scenario, control);
       if (rank == 0) {
         const auto files = io::write_results(out_dir, result, {config::to_json(scenario).dump(), ""});
         std::cout << std::fixed << std::setprecision(2);
-        for (const char* key : {"ejection_fraction_percent", "cardiac_output_l_min", "edv_ml", "esv_ml",
-                                "lv_peak_pressure_mmhg", "aortic_pressure_max_mmhg", "aortic_pressure_min_mmhg",
-                                "beats_simulated", "wall_time_s"})
-          std::cout << std::left << std::setw(28) << key << " " << result.metrics[key] << "\n";
+        for (const auto& key : scene::metric_names(scenario.scene)) {
+          const auto it = result.metrics.find(key);
+          if (it != result.metrics.end()) std::cout << std::left << std::setw(32) << key << " " << it->second << "\n";
+        }
         for (const auto& f : files) std::cout << "wrote " << f.string() << "\n";
       }
     }

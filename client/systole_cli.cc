@@ -339,12 +339,17 @@ int main(int argc, char** argv) {
       client.check(client.stub().GetResult(context.get(), request, &result));
       const auto& m = result.metrics();
       auto get = [&](const char* k) { auto it = m.find(k); return it == m.end() ? std::nan("") : it->second; };
-      std::cout << std::fixed << std::setprecision(1) << "\nejection fraction  " << get("ejection_fraction_percent")
-                << " %\n" << std::setprecision(2) << "cardiac output     " << get("cardiac_output_l_min") << " l/min\n"
-                << std::setprecision(1) << "EDV / ESV          " << get("edv_ml") << " / " << get("esv_ml") << " ml\n"
-                << std::setprecision(0) << "LV peak pressure   " << get("lv_peak_pressure_mmhg") << " mmHg\n"
-                << "aortic pressure    " << get("aortic_pressure_max_mmhg") << "/" << get("aortic_pressure_min_mmhg")
-                << " mmHg\n" << "beats simulated    " << get("beats_simulated") << "\n";
+      if (m.contains("ejection_fraction_percent")) {
+        std::cout << std::fixed << std::setprecision(1) << "\nejection fraction  " << get("ejection_fraction_percent")
+                  << " %\n" << std::setprecision(2) << "cardiac output     " << get("cardiac_output_l_min") << " l/min\n"
+                  << std::setprecision(1) << "EDV / ESV          " << get("edv_ml") << " / " << get("esv_ml") << " ml\n"
+                  << std::setprecision(0) << "LV peak pressure   " << get("lv_peak_pressure_mmhg") << " mmHg\n"
+                  << "aortic pressure    " << get("aortic_pressure_max_mmhg") << "/" << get("aortic_pressure_min_mmhg")
+                  << " mmHg\n" << "beats simulated    " << get("beats_simulated") << "\n";
+      } else {  // scenes without a heart (fluid, analytic): every metric
+        std::cout << "\n";
+        print_results(result, false, false);
+      }
       for (const auto& f : files) std::cout << "wrote " << fs::absolute(f).string() << "\n";
     }
     return 0;

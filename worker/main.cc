@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <chrono>
@@ -156,7 +157,9 @@ class JobSession {
 // RunControl for every rank: rank 0 decides, the decision is broadcast (collective).
 class WorkerControl final : public scene::RunControl {
  public:
-  WorkerControl(MPI_Comm comm, JobSession* session) : comm_(comm), session_(session) {}
+  WorkerControl(MPI_Comm comm, JobSession* session, fs::path output) : comm_(comm), session_(session), output_(std::move(output)) {}
+  // Where a scene writes extra files (3-D fields); rank 0 uploads every file found there.
+  fs::path output_directory() override { return output_; }
   void on_progress(const ProgressReport& report) override {
     if (session_) session_->set_progress(report);
   }
@@ -170,6 +173,7 @@ class WorkerControl final : public scene::RunControl {
  private:
   MPI_Comm comm_;
   JobSession* session_;  // rank 0 only
+  fs::path output_;
 };
 
 grpc::Status upload(v1::WorkerApi::Stub& stub, const std::string& worker_id, const std::string& job_id,
@@ -235,7 +239,18 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
              const std::string& job_id, const std::string& scenario_text, const fs::path& scratch) {
   std::unique_ptr<JobSession> session;
   if (rank == 0) session = std::make_unique<JobSession>(*stub, worker_id, job_id);
-  WorkerControl control(comm, session.get());
+  const fs::path dir = scratch / job_id;
+  if (rank == 0) fs::create_directories(dir);
+  // Rank 0 removes the job's scratch files whatever the outcome (after the uploads).
+  struct RemoveOnExit {
+    fs::path path;
+    ~RemoveOnExit() {
+      std::error_code ignored;
+      if (!path.empty()) fs::remove_all(path, ignored);
+    }
+  } cleanup{rank == 0 ? dir : fs::path()};
+  MPI_Barrier(comm);
+  WorkerControl control(comm, session.get(), dir);
   enum class Outcome { kDone, kCancelled, kFailed, kFatal } outcome = Outcome::kDone;
   std::string error;
   RunResult result;
@@ -274,8 +289,11 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
   }
   if (outcome == Outcome::kDone) {
     try {
-      const fs::path dir = scratch / job_id;
-      const auto files = io::write_results(dir, result, {config::to_json(scenario).dump(), job_id});
+      (void)io::write_results(dir, result, {config::to_json(scenario).dump(), job_id});
+      std::vector<fs::path> files;  // the three result files and whatever the scene wrote (fields)
+      for (const auto& entry : fs::directory_iterator(dir))
+        if (entry.is_regular_file() && entry.path().extension() != ".tmp") files.push_back(entry.path());
+      std::sort(files.begin(), files.end());
       for (const auto& file : files) {
         const auto status = upload(*stub, worker_id, job_id, file);
         if (!status.ok()) throw std::runtime_error("upload of " + file.filename().string() + ": " + status.error_message());
@@ -287,7 +305,6 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
       session->flush();
       session.reset();
       report(*stub, &v1::WorkerApi::Stub::CompleteJob, complete, "complete");
-      fs::remove_all(dir);
       spdlog::info("job {} done: EF {:.1f} %, CO {:.2f} l/min", job_id, result.metrics["ejection_fraction_percent"],
                    result.metrics["cardiac_output_l_min"]);
       return;

@@ -155,8 +155,10 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(electro.stimulus.amplitude_ua_per_cm2, "uA/cm^2", 35, 0, 1000,
                            "Stimulus amplitude."));
   // --- fluid (eq 1-10, MODEL.md §3) ------------------------------------------------------
-  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.kinematic_viscosity_m2_per_s, "m^2/s", 4.8e-6, 0, 1e-3,
-                                    "Blood kinematic viscosity (Re = U_m d_m / nu = 3000)."));
+  t.push_back(SYSTOLE_REAL(fluid.kinematic_viscosity_m2_per_s, "m^2/s", 4.8e-6, 1e-8, 0.1,
+                           "Newtonian kinematic viscosity; Re = U_m d_m / nu = 0.0144 m^2/s / nu (seed blood "
+                           "4.8e-6: Re = 3000). Values above ~1e-5 are not blood: they reach the low-Re "
+                           "verification flows of scene 'fluid' (Re = 10 at 1.44e-3, Re = 100 at 1.44e-4)."));
   t.push_back(SYSTOLE_CHOICE(fluid.viscosity_model, "newtonian",
                              (std::vector<std::string_view>{"newtonian", "carreau_yasuda"}),
                              "Newtonian (seed) or Carreau-Yasuda shear thinning."));
@@ -170,6 +172,36 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.max_dt_ms, "ms", 0.1, 0, 10, "Largest fluid time step."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.darcy_permeability, "", 0.001, 0, 1,
                                     "Darcy afterload permeability k, nondimensional (seed 0.001)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.carreau_yasuda_mu0_pa_s, "Pa*s", 0.056, 0, 10,
+                                    "Carreau-Yasuda zero-shear viscosity mu0 in mu = mu_inf + (mu0 - mu_inf) "
+                                    "[1 + (lambda gamma_dot)^a]^((n-1)/a); blood: Cho & Kensey 1991."));
+  t.push_back(SYSTOLE_REAL(fluid.carreau_yasuda_mu_inf_pa_s, "Pa*s", 0.00345, 0, 10,
+                           "Carreau-Yasuda infinite-shear viscosity mu_inf (<= mu0); blood: Cho & Kensey 1991."));
+  t.push_back(SYSTOLE_REAL(fluid.carreau_yasuda_lambda_s, "s", 3.313, 0, 1000,
+                           "Carreau-Yasuda time constant lambda; blood: Cho & Kensey 1991."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.carreau_yasuda_n, "", 0.3568, 0, 1,
+                                    "Carreau-Yasuda power-law index n (shear thinning; 1 is Newtonian); blood: "
+                                    "Cho & Kensey 1991."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.carreau_yasuda_a, "", 2, 0, 10,
+                                    "Carreau-Yasuda transition exponent a (2: the Carreau law of Cho & Kensey)."));
+  t.push_back(SYSTOLE_REAL(fluid.density_kg_per_m3, "kg/m^3", 1060, 500, 3000,
+                           "Blood density; converts the Carreau-Yasuda viscosities to nu = mu / rho "
+                           "(nondimensional nu* = mu / (rho U_m d_m)). Not used by the Newtonian model."));
+  t.push_back(SYSTOLE_CHOICE(fluid.verification_case, "taylor_green_2d",
+                             (std::vector<std::string_view>{"taylor_green_2d", "poiseuille", "couette", "womersley",
+                                                            "taylor_green_3d"}),
+                             "Scene 'fluid': the verification flow (solver/fluid/verification_cases.h). Each case "
+                             "fixes its own box and walls; box_*_mm are not used; nx, ny, nz are points "
+                             "(cells + 1)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.end_time_ms, "ms", 40, 0, 1e7,
+                                    "Scene 'fluid': simulated time (40 ms = one d_m / U_m). Samples of the time "
+                                    "series every outputs.time_series_interval_ms."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.womersley_number, "", 4, 0, 100,
+                                    "Scene 'fluid', womersley case: Wo = (L_z/2) sqrt(omega Re) of the oscillating "
+                                    "pressure gradient."));
+  t.push_back(SYSTOLE_BOOL(fluid.write_fields, false,
+                           "Scene 'fluid': write velocity, pressure and vorticity at the end (HDF5 + XDMF, "
+                           "fluid_fields.h5/.xmf in the output directory); outputs.fields selects a subset."));
   // --- 0-D circulation (solver/lumped/README.md) -----------------------------------------
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.lv.emax_mmhg_per_ml, "mmHg/ml", 2.7, 0, 50,
                                     "LV peak (end-systolic) elastance Emax in E(t) = Emin + "

@@ -18,7 +18,7 @@ const std::vector<std::string>& known_scenes() {
 
 // Updated as each scene lands (its issue); see solver/scene/.
 const std::vector<std::string>& implemented_scenes() {
-  static const std::vector<std::string> scenes{"lumped", "analytic"};
+  static const std::vector<std::string> scenes{"lumped", "analytic", "fluid"};
   return scenes;
 }
 
@@ -172,6 +172,31 @@ void walk(const nlohmann::json& node, const std::string& prefix, Scenario& s,
   }
 }
 
+// Fluid rules (solver/fluid): the Carreau–Yasuda law must be shear thinning; scene "fluid"
+// needs a case with a reference for it and a bounded number of time-series samples.
+void check_fluid_rules(const Scenario& s, std::vector<std::string>& errors) {
+  const Fluid& f = s.fluid;
+  std::ostringstream m;
+  if (f.viscosity_model == "carreau_yasuda" && f.carreau_yasuda_mu_inf_pa_s > f.carreau_yasuda_mu0_pa_s) {
+    m << "fluid.carreau_yasuda_mu_inf_pa_s = " << f.carreau_yasuda_mu_inf_pa_s
+      << " must not exceed fluid.carreau_yasuda_mu0_pa_s = " << f.carreau_yasuda_mu0_pa_s
+      << " (the Carreau-Yasuda law is shear thinning)";
+    errors.push_back(m.str());
+    m.str("");
+  }
+  if (s.scene != "fluid") return;
+  if (f.viscosity_model == "carreau_yasuda" && f.verification_case != "poiseuille" && f.verification_case != "couette")
+    errors.push_back("fluid.viscosity_model = 'carreau_yasuda' needs fluid.verification_case = poiseuille or couette "
+                     "(the cases with a reference solution for it), not '" + f.verification_case + "'");
+  const double samples = f.end_time_ms / s.outputs.time_series_interval_ms;
+  if (samples > 100000) {
+    m << "fluid.end_time_ms / outputs.time_series_interval_ms = " << f.end_time_ms << " / "
+      << s.outputs.time_series_interval_ms << " = " << samples
+      << " samples; allowed at most 100000: raise outputs.time_series_interval_ms";
+    errors.push_back(m.str());
+  }
+}
+
 // Cross-field rules, after every field is individually in range.
 void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
   auto fail = [&](const std::string& m) { errors.push_back(m); };
@@ -206,6 +231,7 @@ void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
   check_geometry_rules(s.geometry, errors);
   if (!s.outputs.field_phases.empty() && s.outputs.fields.empty())
     fail("outputs.field_phases is set but outputs.fields is empty: name the fields to write");
+  check_fluid_rules(s, errors);
   bool implemented = false;
   for (const auto& n : implemented_scenes()) implemented = implemented || n == s.scene;
   if (!implemented) {

@@ -61,6 +61,13 @@ struct Fluid {
   double cfl;
   double max_dt_ms;
   double darcy_permeability;
+  double carreau_yasuda_mu0_pa_s, carreau_yasuda_mu_inf_pa_s, carreau_yasuda_lambda_s;
+  double carreau_yasuda_n, carreau_yasuda_a;
+  double density_kg_per_m3;
+  std::string verification_case;
+  double end_time_ms;
+  double womersley_number;
+  bool write_fields;
 };
 
 struct Chamber {

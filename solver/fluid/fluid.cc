@@ -42,9 +42,9 @@ void validate(const FluidParameters& p, const grid::Grid& g) {
   if (!(p.time_scale_s > 0)) bad("time_scale_s", p.time_scale_s, "(0, inf)");
   if (!(p.abort_cfl > 0)) bad("abort_cfl", p.abort_cfl, "(0, inf)");
   if (!(p.abort_energy_growth > 1)) bad("abort_energy_growth", p.abort_energy_growth, "(1, inf)");
-  if (p.viscosity_model != "newtonian")
-    throw InputError("fluid.viscosity_model = '" + p.viscosity_model +
-                     "' is not available; known: newtonian (carreau_yasuda is not implemented yet)");
+  if (p.viscosity_model != "newtonian" && p.viscosity_model != "carreau_yasuda")
+    throw InputError("fluid.viscosity_model = '" + p.viscosity_model + "' is unknown; known: newtonian, carreau_yasuda");
+  if (p.viscosity_model == "carreau_yasuda") validate(p.carreau_yasuda);
   for (std::size_t r = 0; r < p.darcy_regions.size(); ++r) {
     const DarcyRegion& d = p.darcy_regions[r];
     auto inside = [](double lo, double hi, double l) { return 0 <= lo && lo < hi && hi <= l; };
@@ -62,13 +62,14 @@ FluidSolver::FluidSolver(const grid::Slabs& slabs, FluidParameters parameters)
     : slabs_(slabs), par_((validate(parameters, slabs.grid()), std::move(parameters))),
       poisson_(std::make_unique<PoissonSolver>(slabs)), vel_(slabs), p_(slabs), phi_(slabs), rhs_(slabs),
       h_(std::make_unique<Velocity>(slabs)), h_prev_(std::make_unique<Velocity>(slabs)) {
+  if (par_.viscosity_model == "carreau_yasuda") nu_ = std::make_unique<grid::CellField>(slabs);
   apply_velocity_boundary_conditions(vel_);
 }
 
 FluidSolver::~FluidSolver() = default;
 
 std::size_t FluidSolver::bytes_allocated() const {
-  std::size_t fields = 3 * 3 + 3 + (force_ ? 3 : 0);
+  std::size_t fields = 3 * 3 + 3 + (force_ ? 3 : 0) + (nu_ ? 1 : 0);
   return fields * p_.bytes() + poisson_->bytes_allocated();
 }
 
@@ -128,7 +129,7 @@ double FluidSolver::choose_time_step(double t_limit) const {
   if (par_.adaptive_dt) {
     const double rate = max_u_ / g.dx() + max_v_ / g.dy() + max_w_ / g.dz();
     if (rate > 0) dt = std::min(dt, par_.cfl / rate);
-    const double nu = 1.0 / par_.reynolds;
+    const double nu = max_viscosity();  // Carreau–Yasuda: the largest ν(γ̇) of the field
     const double lam = 4 / (g.dx() * g.dx()) + 4 / (g.dy() * g.dy()) + 4 / (g.dz() * g.dz());
     dt = std::min(dt, par_.viscous_safety / (nu * lam));
   }
@@ -141,10 +142,21 @@ double FluidSolver::choose_time_step(double t_limit) const {
 }
 
 // ---- the explicit terms, eq 1–2: H = −∇·(u u) + Re⁻¹ ∇²u, at each velocity's own faces ----
+// Carreau–Yasuda: H = −∇·(uu) + ∇·[ν(γ̇)(∇u + ∇uᵀ)], ν from update_viscosity().
 void FluidSolver::compute_explicit_terms() {
+  if (nu_) {
+    explicit_terms_kernel<false>();
+    add_variable_viscous_term();
+  } else {
+    explicit_terms_kernel<true>();
+  }
+}
+
+template <bool kNewtonianViscous>
+void FluidSolver::explicit_terms_kernel() {
   const grid::Grid& g = slabs_.grid();
   const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
-  const double nu = 1 / par_.reynolds;
+  const double nu = kNewtonianViscous ? 1 / par_.reynolds : 0.0;
   const double cx = nu * idx * idx, cy = nu * idy * idy, cz = nu * idz * idz;
   const auto sj = vel_.u.stride_j(), sk = vel_.u.stride_k();
   const int nx = g.nx(), ny = g.ny();
@@ -168,7 +180,7 @@ void FluidSolver::compute_explicit_terms() {
                            (wt * 0.5 * (u[i + sk] + u[i]) - wb * 0.5 * (u[i] + u[i - sk])) * idz;
         const double lap = cx * (u[i + 1] - 2 * u[i] + u[i - 1]) + cy * (u[i + sj] - 2 * u[i] + u[i - sj]) +
                            cz * (u[i + sk] - 2 * u[i] + u[i - sk]);
-        hu[i] = lap - adv;
+        hu[i] = kNewtonianViscous ? lap - adv : -adv;
       }
       // v at y-face (i,j,k)
       for (int i = 0; i < nx; ++i) {
@@ -180,7 +192,7 @@ void FluidSolver::compute_explicit_terms() {
                            (wt * 0.5 * (v[i + sk] + v[i]) - wb * 0.5 * (v[i] + v[i - sk])) * idz;
         const double lap = cx * (v[i + 1] - 2 * v[i] + v[i - 1]) + cy * (v[i + sj] - 2 * v[i] + v[i - sj]) +
                            cz * (v[i + sk] - 2 * v[i] + v[i - sk]);
-        hv[i] = lap - adv;
+        hv[i] = kNewtonianViscous ? lap - adv : -adv;
       }
       // w at z-face (i,j,k); the wall face keeps w = 0
       if (bottom_wall_face) {
@@ -196,7 +208,153 @@ void FluidSolver::compute_explicit_terms() {
                            (wt * wt - wb * wb) * idz;
         const double lap = cx * (w[i + 1] - 2 * w[i] + w[i - 1]) + cy * (w[i + sj] - 2 * w[i] + w[i - sj]) +
                            cz * (w[i + sk] - 2 * w[i] + w[i - sk]);
-        hw[i] = lap - adv;
+        hw[i] = kNewtonianViscous ? lap - adv : -adv;
+      }
+    }
+  }
+}
+
+// ---- Carreau–Yasuda viscosity (viscosity.h) -------------------------------------------------
+// ν(γ̇) at the cell centres from the current velocity (halos and wall ghosts valid), then the
+// halo layer: neighbour slabs and periodic x, y by exchange; at a no-slip wall the ghost cell
+// takes the linear extrapolation 2ν₀ − ν₁ (ours: the wall-edge average is then ν at the wall to
+// second order), clamped to [ν∞, ν0]; at a free-slip wall the mirror value ν₀ (the flow is
+// symmetric there). nu_max_ is the global maximum, ghosts included: it limits the next Δt.
+void FluidSolver::update_viscosity() { nu_max_ = global_max(compute_viscosity(*nu_), slabs_.comm()); }
+
+double FluidSolver::compute_viscosity(grid::CellField& nu) const {
+  const grid::Grid& g = slabs_.grid();
+  const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
+  const CarreauYasuda& law = par_.carreau_yasuda;
+  const auto sj = nu.stride_j(), sk = nu.stride_k();
+  const double *u = vel_.u.data(), *v = vel_.v.data(), *w = vel_.w.data();
+  double* out = nu.data();
+  for (int k = 0; k < nu.k_count(); ++k)
+    for (int j = 0; j < g.ny(); ++j) {
+      const auto row = nu.index(0, j, k);
+      for (int i = 0; i < g.nx(); ++i)
+        out[row + i] = law.from_shear_rate_squared(strain_rate_squared_at_cell(u, v, w, row + i, sj, sk, idx, idy, idz));
+    }
+  grid::exchange_halos(nu, slabs_);
+  const double lo = std::min(law.nu_inf, law.nu0), hi = std::max(law.nu_inf, law.nu0);
+  auto ghost = [&](const Wall& wall, int g_k, int k0, int k1) {
+    for (int j = -1; j <= g.ny(); ++j)
+      for (int i = -1; i <= g.nx(); ++i)
+        nu(i, j, g_k) = wall.kind == WallKind::free_slip ? nu(i, j, k0)
+                                                         : std::clamp(2 * nu(i, j, k0) - nu(i, j, k1), lo, hi);
+  };
+  const int nzl = nu.k_count();
+  if (slabs_.owns_bottom_wall()) ghost(par_.bottom_wall, -1, 0, 1);
+  if (slabs_.owns_top_wall()) ghost(par_.top_wall, nzl, nzl - 1, nzl - 2);
+  double m = 0;
+  for (int k = -1; k <= nzl; ++k)
+    for (int j = 0; j < g.ny(); ++j)
+      for (int i = 0; i < g.nx(); ++i) m = std::max(m, nu(i, j, k));
+  return m;
+}
+
+// The exact discrete energy sink of add_variable_viscous_term (summation by parts): the volume
+// mean of 2ν(S_xx² + S_yy² + S_zz²) at the cells plus ν_edge (2S_ab)² at the cell edges, the
+// edges on a wall weighted ½ (they bound half a cell). Collective (ν needs its halos).
+double FluidSolver::variable_viscosity_dissipation() const {
+  const grid::Grid& g = slabs_.grid();
+  grid::CellField nu(slabs_);
+  compute_viscosity(nu);
+  const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
+  const auto sj = nu.stride_j(), sk = nu.stride_k();
+  const double *u = vel_.u.data(), *v = vel_.v.data(), *w = vel_.w.data(), *n = nu.data();
+  auto sq = [](double x) { return x * x; };
+  double sum = 0;
+  const int nzl = nu.k_count();
+  // z-edge levels owned here: k = 0 .. nzl−1, plus the top wall level nzl on the top slab.
+  for (int k = 0; k <= nzl; ++k) {
+    const int kg = slabs_.k_begin() + k;
+    if (k == nzl && !slabs_.owns_top_wall()) break;
+    const double weight = (kg == 0 || kg == g.nz()) ? 0.5 : 1.0;
+    for (int j = 0; j < g.ny(); ++j) {
+      const auto row = nu.index(0, j, k);
+      for (int i = 0; i < g.nx(); ++i) {
+        const auto q = row + i;
+        if (k < nzl) {
+          const double sxx = (u[q + 1] - u[q]) * idx, syy = (v[q + sj] - v[q]) * idy, szz = (w[q + sk] - w[q]) * idz;
+          sum += 2 * n[q] * (sxx * sxx + syy * syy + szz * szz);
+          // xy-edge (i, j) at this cell level
+          sum += 0.25 * (n[q] + n[q - 1] + n[q - sj] + n[q - 1 - sj]) *
+                 sq((u[q] - u[q - sj]) * idy + (v[q] - v[q - 1]) * idx);
+        }
+        // xz-edge (i, k) and yz-edge (j, k) at the z level of face k
+        sum += weight * 0.25 * (n[q] + n[q - 1] + n[q - sk] + n[q - 1 - sk]) *
+               sq((u[q] - u[q - sk]) * idz + (w[q] - w[q - 1]) * idx);
+        sum += weight * 0.25 * (n[q] + n[q - sj] + n[q - sk] + n[q - sj - sk]) *
+               sq((v[q] - v[q - sk]) * idz + (w[q] - w[q - sj]) * idy);
+      }
+    }
+  }
+  return global_sum(sum, slabs_.comm()) / static_cast<double>(g.cells());
+}
+
+// H += ∇·[ν(∇u + ∇uᵀ)] in divergence form on the MAC grid: normal stresses 2ν∂u_a/∂x_a at the
+// cell centres, shear stresses ν(∂u_a/∂x_b + ∂u_b/∂x_a) at the cell edges with ν averaged from
+// the four cells sharing the edge. With ν constant it equals ν∇²u + ν∇(∇·u), i.e. the
+// Newtonian term up to the round-off divergence the projection leaves.
+void FluidSolver::add_variable_viscous_term() {
+  const grid::Grid& g = slabs_.grid();
+  const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
+  const auto sj = vel_.u.stride_j(), sk = vel_.u.stride_k();
+  const int nx = g.nx(), ny = g.ny();
+  for (int k = 0; k < vel_.u.k_count(); ++k) {
+    const bool bottom_wall_face = slabs_.k_begin() + k == 0;
+    for (int j = 0; j < ny; ++j) {
+      const auto row = vel_.u.index(0, j, k);
+      const double* u = vel_.u.data() + row;
+      const double* v = vel_.v.data() + row;
+      const double* w = vel_.w.data() + row;
+      const double* nu = nu_->data() + row;
+      double* hu = h_->u.data() + row;
+      double* hv = h_->v.data() + row;
+      double* hw = h_->w.data() + row;
+      // u at x-face (i,j,k): τxx at cells i−1, i; τxy at xy-edges (i,j), (i,j+1); τxz at xz-edges (i,k), (i,k+1).
+      for (int i = 0; i < nx; ++i) {
+        const double txx_e = 2 * nu[i] * (u[i + 1] - u[i]) * idx;
+        const double txx_w = 2 * nu[i - 1] * (u[i] - u[i - 1]) * idx;
+        const double nu_n = 0.25 * (nu[i + sj] + nu[i - 1 + sj] + nu[i] + nu[i - 1]);
+        const double nu_s = 0.25 * (nu[i] + nu[i - 1] + nu[i - sj] + nu[i - 1 - sj]);
+        const double txy_n = nu_n * ((u[i + sj] - u[i]) * idy + (v[i + sj] - v[i - 1 + sj]) * idx);
+        const double txy_s = nu_s * ((u[i] - u[i - sj]) * idy + (v[i] - v[i - 1]) * idx);
+        const double nu_t = 0.25 * (nu[i + sk] + nu[i - 1 + sk] + nu[i] + nu[i - 1]);
+        const double nu_b = 0.25 * (nu[i] + nu[i - 1] + nu[i - sk] + nu[i - 1 - sk]);
+        const double txz_t = nu_t * ((u[i + sk] - u[i]) * idz + (w[i + sk] - w[i - 1 + sk]) * idx);
+        const double txz_b = nu_b * ((u[i] - u[i - sk]) * idz + (w[i] - w[i - 1]) * idx);
+        hu[i] += (txx_e - txx_w) * idx + (txy_n - txy_s) * idy + (txz_t - txz_b) * idz;
+      }
+      // v at y-face (i,j,k): τxy at xy-edges (i,j), (i+1,j); τyy at cells j−1, j; τyz at yz-edges (j,k), (j,k+1).
+      for (int i = 0; i < nx; ++i) {
+        const double nu_e = 0.25 * (nu[i + 1] + nu[i] + nu[i + 1 - sj] + nu[i - sj]);
+        const double nu_w = 0.25 * (nu[i] + nu[i - 1] + nu[i - sj] + nu[i - 1 - sj]);
+        const double txy_e = nu_e * ((u[i + 1] - u[i + 1 - sj]) * idy + (v[i + 1] - v[i]) * idx);
+        const double txy_w = nu_w * ((u[i] - u[i - sj]) * idy + (v[i] - v[i - 1]) * idx);
+        const double tyy_n = 2 * nu[i] * (v[i + sj] - v[i]) * idy;
+        const double tyy_s = 2 * nu[i - sj] * (v[i] - v[i - sj]) * idy;
+        const double nu_t = 0.25 * (nu[i + sk] + nu[i + sk - sj] + nu[i] + nu[i - sj]);
+        const double nu_b = 0.25 * (nu[i] + nu[i - sj] + nu[i - sk] + nu[i - sj - sk]);
+        const double tyz_t = nu_t * ((v[i + sk] - v[i]) * idz + (w[i + sk] - w[i + sk - sj]) * idy);
+        const double tyz_b = nu_b * ((v[i] - v[i - sk]) * idz + (w[i] - w[i - sj]) * idy);
+        hv[i] += (txy_e - txy_w) * idx + (tyy_n - tyy_s) * idy + (tyz_t - tyz_b) * idz;
+      }
+      if (bottom_wall_face) continue;  // the wall face keeps w = 0 (H = 0 there)
+      // w at z-face (i,j,k): τxz at xz-edges (i,k), (i+1,k); τyz at yz-edges (j,k), (j+1,k); τzz at cells k−1, k.
+      for (int i = 0; i < nx; ++i) {
+        const double nu_e = 0.25 * (nu[i + 1] + nu[i] + nu[i + 1 - sk] + nu[i - sk]);
+        const double nu_w = 0.25 * (nu[i] + nu[i - 1] + nu[i - sk] + nu[i - 1 - sk]);
+        const double txz_e = nu_e * ((u[i + 1] - u[i + 1 - sk]) * idz + (w[i + 1] - w[i]) * idx);
+        const double txz_w = nu_w * ((u[i] - u[i - sk]) * idz + (w[i] - w[i - 1]) * idx);
+        const double nu_n = 0.25 * (nu[i + sj] + nu[i] + nu[i + sj - sk] + nu[i - sk]);
+        const double nu_s = 0.25 * (nu[i] + nu[i - sj] + nu[i - sk] + nu[i - sj - sk]);
+        const double tyz_n = nu_n * ((v[i + sj] - v[i + sj - sk]) * idz + (w[i + sj] - w[i]) * idy);
+        const double tyz_s = nu_s * ((v[i] - v[i - sk]) * idz + (w[i] - w[i - sj]) * idy);
+        const double tzz_t = 2 * nu[i] * (w[i + sk] - w[i]) * idz;
+        const double tzz_b = 2 * nu[i - sk] * (w[i] - w[i - sk]) * idz;
+        hw[i] += (txz_e - txz_w) * idx + (tyz_n - tyz_s) * idy + (tzz_t - tzz_b) * idz;
       }
     }
   }
@@ -355,6 +513,7 @@ void FluidSolver::check_stability(double dt) {
 }
 
 double FluidSolver::advance(double t_limit) {
+  if (nu_) update_viscosity();  // ν(γ̇ⁿ): the explicit term and the Δt limit need it
   const double dt = choose_time_step(t_limit);
   // AB2 coefficients for a variable step (ours; γ = 3/2, ρ = −1/2 when Δt is constant). The
   // first step is forward Euler (γ = 1, ρ = 0).
@@ -416,6 +575,7 @@ FlowDiagnostics FluidSolver::diagnostics() const {
   FlowDiagnostics d;
   d.kinetic_energy = kinetic_energy_;
   d.dissipation = global_sum(grad2, slabs_.comm()) / static_cast<double>(g.cells()) / par_.reynolds;
+  if (nu_) d.dissipation = variable_viscosity_dissipation();
   d.max_divergence = global_max(max_abs_divergence_local(g, vel_.u, vel_.v, vel_.w), slabs_.comm());
   d.max_speed = std::max({max_u_, max_v_, max_w_});
   return d;
@@ -471,7 +631,7 @@ void FluidSolver::restore_checkpoint(const std::filesystem::path& file) {
   kinetic_energy_ = f.read_attribute("kinetic_energy");
 }
 
-void FluidSolver::write_fields(const std::filesystem::path& h5_file) const {
+void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelection which) const {
   const grid::Grid& g = slabs_.grid();
   grid::CellField uc(slabs_), vc(slabs_), wc(slabs_), ox(slabs_), oy(slabs_), oz(slabs_);
   const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
@@ -498,22 +658,28 @@ void FluidSolver::write_fields(const std::filesystem::path& h5_file) const {
       }
   {
     grid::FieldFile f(h5_file, slabs_, grid::FieldFile::Mode::create);
-    f.write("velocity_x", uc);
-    f.write("velocity_y", vc);
-    f.write("velocity_z", wc);
-    f.write("pressure", p_);
-    f.write("vorticity_x", ox);
-    f.write("vorticity_y", oy);
-    f.write("vorticity_z", oz);
+    if (which.velocity) {
+      f.write("velocity_x", uc);
+      f.write("velocity_y", vc);
+      f.write("velocity_z", wc);
+    }
+    if (which.pressure) f.write("pressure", p_);
+    if (which.vorticity) {
+      f.write("vorticity_x", ox);
+      f.write("vorticity_y", oy);
+      f.write("vorticity_z", oz);
+    }
     f.write_attribute("time", time_);
   }
   if (slabs_.rank() == 0) {
     auto xdmf = h5_file;
     xdmf.replace_extension(".xmf");
-    grid::write_xdmf(xdmf, h5_file.filename().string(), g, {"pressure"},
-                     {{"velocity", "velocity_x", "velocity_y", "velocity_z"},
-                      {"vorticity", "vorticity_x", "vorticity_y", "vorticity_z"}},
-                     time_);
+    std::vector<std::string> scalars;
+    std::vector<grid::XdmfVector> vectors;
+    if (which.pressure) scalars.push_back("pressure");
+    if (which.velocity) vectors.push_back({"velocity", "velocity_x", "velocity_y", "velocity_z"});
+    if (which.vorticity) vectors.push_back({"vorticity", "vorticity_x", "vorticity_y", "vorticity_z"});
+    grid::write_xdmf(xdmf, h5_file.filename().string(), g, scalars, vectors, time_);
   }
 }
 

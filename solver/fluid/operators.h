@@ -5,6 +5,7 @@
 // pressure solver equals divergence ∘ gradient, which is what makes the projection exact.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "solver/grid/grid.h"
 
@@ -69,6 +70,24 @@ inline void subtract_gradient_at_faces(const grid::Slabs& s, const grid::CellFie
         for (int i = 0; i < u.nx(); ++i) pw[i] -= cz * (pp[i] - pp[i - sk]);
     }
   }
+}
+
+// γ̇² = 2 S:S, S = ½(∇u + ∇uᵀ), at the centre of the cell with storage index q (all fields share
+// one layout; sj, sk its strides). The diagonal of S from the face differences across the cell;
+// each off-diagonal 2S_ab from its value at the four cell edges around the centre, averaged
+// (second order). Reads one halo layer: valid halos and wall ghosts are the caller's.
+inline double strain_rate_squared_at_cell(const double* u, const double* v, const double* w, std::ptrdiff_t q,
+                                          std::ptrdiff_t sj, std::ptrdiff_t sk, double idx, double idy,
+                                          double idz) {
+  const double sxx = (u[q + 1] - u[q]) * idx, syy = (v[q + sj] - v[q]) * idy, szz = (w[q + sk] - w[q]) * idz;
+  // 2S_xy at the xy-edge of storage index e (x = x_i, y = y_j): ∂u/∂y + ∂v/∂x.
+  auto exy = [&](std::ptrdiff_t e) { return (u[e] - u[e - sj]) * idy + (v[e] - v[e - 1]) * idx; };
+  auto exz = [&](std::ptrdiff_t e) { return (u[e] - u[e - sk]) * idz + (w[e] - w[e - 1]) * idx; };
+  auto eyz = [&](std::ptrdiff_t e) { return (v[e] - v[e - sk]) * idz + (w[e] - w[e - sj]) * idy; };
+  const double gxy = 0.25 * (exy(q) + exy(q + 1) + exy(q + sj) + exy(q + 1 + sj));
+  const double gxz = 0.25 * (exz(q) + exz(q + 1) + exz(q + sk) + exz(q + 1 + sk));
+  const double gyz = 0.25 * (eyz(q) + eyz(q + sj) + eyz(q + sk) + eyz(q + sj + sk));
+  return 2 * (sxx * sxx + syy * syy + szz * szz) + gxy * gxy + gxz * gxz + gyz * gyz;
 }
 
 }  // namespace systole::fluid

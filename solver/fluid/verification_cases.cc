@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <memory>
+#include <vector>
 #include <numbers>
 #include <sstream>
 
@@ -91,7 +93,7 @@ VerificationCase parse_verification_case(const std::string& name) {
     if (name == n.name) return n.c;
     known += (known.empty() ? "" : ", ") + std::string(n.name);
   }
-  throw InputError("fluid.case = '" + name + "' is unknown; known: " + known);
+  throw InputError("fluid.verification_case = '" + name + "' is unknown; known: " + known);
 }
 
 RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
@@ -102,6 +104,11 @@ RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
     throw InputError("fluid.samples = " + std::to_string(spec.samples) + " is out of range [1, 100000]");
   if (spec.case_name == VerificationCase::womersley && !(spec.womersley_number > 0 && spec.womersley_number <= 100))
     throw InputError("fluid.womersley_number = " + std::to_string(spec.womersley_number) + " is out of range (0, 100]");
+  const bool shear_thinning = spec.viscosity_model == "carreau_yasuda";
+  if (shear_thinning && spec.case_name != VerificationCase::poiseuille && spec.case_name != VerificationCase::couette)
+    throw InputError(std::string("fluid.viscosity_model = 'carreau_yasuda' needs a case with a reference solution for it: "
+                                 "fluid.verification_case = poiseuille or couette, not ") +
+                     to_string(spec.case_name));
   const grid::Grid grid(box_for(spec));
   const grid::Slabs slabs(grid, comm);
 
@@ -111,6 +118,8 @@ RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
   par.max_dt = spec.max_dt;
   par.adaptive_dt = spec.adaptive_dt;
   par.time_scale_s = spec.time_scale_s;
+  par.viscosity_model = spec.viscosity_model;
+  par.carreau_yasuda = spec.carreau_yasuda;
   par.darcy_regions.clear();
   const double re = spec.reynolds;
   Exact exact;
@@ -129,7 +138,23 @@ RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
       v0 = [](double x, double y, double z) { return -std::cos(x) * std::sin(y) * std::cos(z); };
       break;
     case VerificationCase::poiseuille:
-      exact.u = [](double, double, double z, double) { return 4 * z * (1 - z); };
+      if (shear_thinning) {
+        // The 1-D reference at the z levels of the x-faces (cell centres), computed once.
+        const CarreauYasuda law = spec.carreau_yasuda;
+        auto profile = std::make_shared<std::vector<double>>(grid.nz());
+        double peak = 0;
+        for (int k = 0; k < grid.nz(); ++k) {
+          (*profile)[k] = plane_poiseuille_velocity(law, 8.0 / re, 1.0, grid.z(grid::Location::x_face, k));
+          peak = std::max(peak, (*profile)[k]);
+        }
+        const double dz = grid.dz();
+        exact.u = [profile, dz](double, double, double z, double) {
+          return (*profile)[static_cast<std::size_t>(std::lround(z / dz - 0.5))];
+        };
+        exact.peak = std::max(peak, plane_poiseuille_velocity(law, 8.0 / re, 1.0, 0.5));
+      } else {
+        exact.u = [](double, double, double z, double) { return 4 * z * (1 - z); };
+      }
       exact.v = [](double, double, double, double) { return 0.0; };
       u0 = v0 = [](double, double, double) { return 0.0; };
       break;
@@ -222,6 +247,9 @@ RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
     m["error_l2_relative"] = e.l2;
     m["error_linf_relative"] = e.linf;
   }
+  if (spec.case_name == VerificationCase::poiseuille || spec.case_name == VerificationCase::couette)
+    m["reference_peak_velocity"] = exact.peak;
+  m["max_viscosity"] = fluid.max_viscosity();
   if (spec.case_name == VerificationCase::womersley) {
     m["error_linf_max_over_samples_relative"] = womersley_max_error;
     m["womersley_number"] = spec.womersley_number;
@@ -248,10 +276,13 @@ RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
   result.series = {time_s, ke, diss, divs};
   for (const auto& w : fluid.warnings()) result.notes.push_back(w);
   result.notes.push_back(std::string("fluid verification case ") + to_string(spec.case_name));
+  m["fields_written"] = 0;
   if (!spec.output_dir.empty()) {
     if (slabs.rank() == 0) std::filesystem::create_directories(spec.output_dir);
     MPI_Barrier(slabs.comm());
-    fluid.write_fields(spec.output_dir / "fluid_fields.h5");
+    fluid.write_fields(spec.output_dir / "fluid_fields.h5",
+                       {spec.write_velocity, spec.write_pressure, spec.write_vorticity});
+    m["fields_written"] = 1;
   }
   return result;
 }

@@ -1,8 +1,10 @@
 #pragma once
 // The composition root: a scenario names a scene, and the scene assembles exactly the
-// physics modules it needs. Today: "lumped" (0-D closed-loop left heart, solver/lumped).
+// physics modules it needs. Today: "lumped" (0-D closed-loop left heart, solver/lumped),
+// "analytic" (closed-form test functions) and "fluid" (the verification flows of solver/fluid).
 // Every rank of an MPI worker calls run() with the same scenario; RunControl is how the
 // caller sees progress and asks for a stop.
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -19,6 +21,11 @@ class RunControl {
   virtual void on_progress(const ProgressReport& report) = 0;
   // Collective: every rank calls it at the same points and gets the same answer.
   virtual bool cancel_requested() = 0;
+  // The directory this run's results are published from (the job's output directory); a scene
+  // writes its large artifacts there (scene "fluid": fluid_fields.h5 + .xmf when asked for).
+  // The same path on every rank (parallel HDF5 writes one shared file). Empty (the default):
+  // the caller keeps no files; requested fields are then not written, with a note.
+  virtual std::filesystem::path output_directory() { return {}; }
 };
 
 // Thrown by run() when RunControl::cancel_requested() said so; nothing is reported.

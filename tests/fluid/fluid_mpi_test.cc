@@ -18,9 +18,24 @@ struct FluidRun {
       : slabs(grid::Grid({16, 12, 10, 2 * kPi, 2 * kPi, kPi}), comm), fluid(slabs, p) {}
 };
 
+void compare_one_and_two_ranks(const FluidParameters& p, const char* what);
+
 TEST(Decomposition, OneAndTwoRanksGiveTheSameFields) {
   FluidParameters p;
   p.reynolds = 500;
+  compare_one_and_two_ranks(p, "newtonian");
+}
+
+// Carreau–Yasuda: ν needs its halos from the neighbour slab and its wall ghosts on both.
+TEST(Decomposition, OneAndTwoRanksGiveTheSameFieldsShearThinning) {
+  FluidParameters p;
+  p.viscosity_model = "carreau_yasuda";
+  p.carreau_yasuda = {0.01, 0.002, 3.0, 0.5, 1.5};
+  compare_one_and_two_ranks(p, "carreau_yasuda");
+}
+
+void compare_one_and_two_ranks(const FluidParameters& parameters, const char* what) {
+  FluidParameters p = parameters;
   p.top_wall.velocity_x = 0.3;  // no-slip, moving: exercises the wall ghosts and the body force
   p.darcy_regions.push_back({0, 2 * kPi, 0, 2 * kPi, 1.0, 1.5});
   auto u0 = [](double x, double y, double z) { return std::sin(x) * std::cos(y) * std::sin(z); };
@@ -57,7 +72,7 @@ TEST(Decomposition, OneAndTwoRanksGiveTheSameFields) {
                                          (self.fluid.pressure()(i, j, k0 + k) - p_ref_self)));
   double global = 0;
   MPI_Allreduce(&worst, &global, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  if (world.slabs.rank() == 0) std::printf("  [measured] max |np=2 − np=1| = %.3g\n", global);
+  if (world.slabs.rank() == 0) std::printf("  [measured] %s: max |np=2 − np=1| = %.3g\n", what, global);
   EXPECT_LE(global, 1e-12);
 }
 

@@ -115,7 +115,7 @@ TEST(Config, CrossFieldRules) {
 
 TEST(Config, UnimplementedSceneIsAnErrorNotAFallback) {
   const std::string e = error_of({{"scene", "fsei"}});
-  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic"), std::string::npos) << e;
+  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic, fluid"), std::string::npos) << e;
   EXPECT_NE(error_of({{"scene", "warp"}}).find("unknown scene 'warp'; known: lumped"), std::string::npos);
 }
 

@@ -1,5 +1,6 @@
 // solver/scene: every advertised metric name is really produced; the analytic scene.
 #include <gtest/gtest.h>
+#include <mpi.h>
 
 #include <cmath>
 
@@ -17,9 +18,21 @@ class Quiet final : public RunControl {
   bool cancel = false;
 };
 
+// Scene "fluid" runs on MPI_COMM_WORLD: MPI around the whole test program (1 rank).
+class MpiEnvironment final : public ::testing::Environment {
+ public:
+  void SetUp() override { MPI_Init(nullptr, nullptr); }
+  void TearDown() override { MPI_Finalize(); }
+};
+const auto* const mpi_environment = ::testing::AddGlobalTestEnvironment(new MpiEnvironment);
+
 TEST(Scene, AdvertisedMetricsAreProduced) {
-  for (const std::string scene : {"lumped", "analytic"}) {
-    config::Scenario s = config::parse_scenario({{"scene", scene}});
+  for (const std::string scene : {"lumped", "analytic", "fluid"}) {
+    // The default fluid scenario is the seed's grid 1 (128x128x144 cells, ~30 s): this test
+    // takes a small grid and a short run of the default case instead (deliberately).
+    const nlohmann::json small_fluid{{"nx", 17}, {"ny", 17}, {"nz", 9}, {"end_time_ms", 8}};
+    config::Scenario s = config::parse_scenario(scene == "fluid" ? nlohmann::json{{"scene", scene}, {"fluid", small_fluid}}
+                                                                 : nlohmann::json{{"scene", scene}});
     Quiet control;
     const RunResult r = run(s, control);
     ASSERT_FALSE(metric_names(scene).empty()) << scene;
