@@ -102,13 +102,7 @@ std::string fixed(double v, int decimals = 3) {
   return buffer;
 }
 
-std::string format_time(int64_t ms) {
-  if (ms == 0) return "-";
-  const std::time_t t = static_cast<std::time_t>(ms / 1000);
-  char buffer[32];
-  std::strftime(buffer, sizeof buffer, "%Y-%m-%d %H:%M:%S", std::localtime(&t));
-  return buffer;
-}
+using client::format_time;
 
 std::string one_line(std::string s) {
   for (char& c : s)

@@ -6,6 +6,8 @@
 //   exit 3: the server is unreachable
 //   exit 4: a corrupt download
 #include <chrono>
+#include <cstdint>
+#include <ctime>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -45,6 +47,15 @@ inline void check_status(const grpc::Status& status, const std::string& address)
   if (status.error_code() == grpc::StatusCode::INTERNAL || status.error_code() == grpc::StatusCode::UNKNOWN)
     throw CliError("server error: " + status.error_message(), 1);
   throw CliError("error (" + status_code_name(status.error_code()) + "): " + status.error_message(), 2);
+}
+
+// Local date and time of a millisecond epoch timestamp; "-" for 0 (never).
+inline std::string format_time(int64_t ms) {
+  if (ms == 0) return "-";
+  const std::time_t t = static_cast<std::time_t>(ms / 1000);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%d %H:%M:%S", std::localtime(&t));
+  return buffer;
 }
 
 }  // namespace systole::client

@@ -58,13 +58,7 @@ std::string to_json(const google::protobuf::Message& m) {
   return text;
 }
 
-std::string format_time(int64_t ms) {
-  if (ms == 0) return "-";
-  const std::time_t t = static_cast<std::time_t>(ms / 1000);
-  char buffer[32];
-  std::strftime(buffer, sizeof buffer, "%Y-%m-%d %H:%M:%S", std::localtime(&t));
-  return buffer;
-}
+using client::format_time;
 
 void print_job(const v1::Job& job) {
   std::cout << "job        " << job.id() << "\n"
