@@ -1,0 +1,113 @@
+#pragma once
+// The multirate scheduler: every module advances at its own step between synchronisation
+// points, where the scene's transfers carry data between modules (MODEL.md §7, seed Fig. 6).
+//
+// One synchronisation interval [t, t + Δt_sync] reads like Fig. 6:
+//   for each stage, in order (e.g. EP, fluid, then the structure with the new loads):
+//     sub-cycle the stage's module from t to t + Δt_sync, each substep
+//       dt = min(max_step_ms(), time left)                         (multirate, ours)
+//     run the stage's transfers (outputs of this module -> inputs of later stages now, and of
+//       earlier stages at the next interval or the next strong-coupling iteration)
+//   loose coupling: done (one pass, as the seed's production runs);
+//   strong coupling: restore every module to t and repeat the pass, the transferred data
+//     relaxed (constant factor or Aitken's Δ²), until the relative change of all transferred
+//     data between two passes is below the tolerance (the seed: 1e-4) or the iteration limit
+//     is reached (counted and reported, never hidden).
+//
+// Transferred data are flat vectors of doubles (a pressure, a volume, nodal forces, nodal
+// tensions): the scheduler relaxes and measures them without knowing what they are. Within an
+// interval a module sees its inputs held constant (ours; the seed's loose scheme does the same).
+#include <chrono>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "solver/coupling/module.h"
+
+namespace systole::coupling {
+
+// Moves one output of a module into the inputs of others.
+struct Transfer {
+  std::string name;
+  // Fills `data` from the source module's current outputs (resize as needed).
+  std::function<void(std::vector<double>& data)> read;
+  // Hands (possibly relaxed) data to the target module(s).
+  std::function<void(const std::vector<double>& data)> write;
+  // Strong coupling: relax these data between passes (false: write each pass's data as read;
+  // still part of the convergence measure). Relax one interface quantity of a loop, typically
+  // the loads on the structure.
+  bool relaxed = true;
+};
+
+struct Stage {
+  Module* module = nullptr;        // not owned; outlives the scheduler
+  std::vector<Transfer> after;     // run after the module reached the synchronisation point
+};
+
+enum class CouplingMode { loose, strong };
+enum class Relaxation { none, constant, aitken };
+
+struct SchedulerOptions {
+  double sync_step_ms = 1.0;              // Δt_sync, > 0
+  CouplingMode mode = CouplingMode::loose;
+  double strong_tolerance = 1e-4;         // relative change of the transferred data
+  int strong_max_iterations = 4;          // passes per interval, >= 1
+  Relaxation relaxation = Relaxation::aitken;  // strong coupling only
+  double relaxation_factor = 0.5;         // constant factor / Aitken's first factor, (0, 1]
+  // The smallest step a module may report before the run is declared unstable (a collapsing
+  // stable step means a blow-up in the making) (ours).
+  double min_step_ms = 1e-9;
+  // Test hook: substeps of min(factor * max_step_ms(), time left). Only tests and the
+  // stability study set it above 1 (to show a module detects its own blow-up).
+  double step_limit_factor = 1.0;
+};
+// Throws InputError naming the option and the allowed range.
+void validate(const SchedulerOptions& options);
+
+struct ModuleStats {
+  std::string name;
+  long long steps = 0;
+  double min_step_ms = 0, max_step_ms = 0;  // over all substeps taken
+  double max_step_over_limit = 0;           // max of dt / max_step_ms() (<= 1 unless a test scales)
+  double wall_time_s = 0;
+};
+
+struct SchedulerStats {
+  std::vector<ModuleStats> modules;     // in stage order
+  long long intervals = 0;
+  long long passes = 0;                 // stage passes (= intervals for loose coupling)
+  long long unconverged_intervals = 0;  // strong coupling hit strong_max_iterations
+  double max_final_residual = 0;        // largest relative change at the end of an interval
+};
+
+class Scheduler {
+ public:
+  // Valid from construction: options validated, every stage has a module, all modules at the
+  // same time (InputError / std::invalid_argument otherwise).
+  Scheduler(std::vector<Stage> stages, SchedulerOptions options);
+
+  double time_ms() const { return time_ms_; }
+  // Advances every module to t_ms (>= time_ms()) in synchronisation intervals of
+  // sync_step_ms (the last one shortened to land on t_ms). Throws what the modules throw
+  // (InstabilityError names the module), and InstabilityError("coupling", ...) when a module's
+  // reported step falls below min_step_ms or is not finite.
+  void advance_to(double t_ms);
+
+  const SchedulerStats& stats() const { return stats_; }
+
+ private:
+  double run_pass(double t_end_ms, int iteration);
+  void sub_cycle(std::size_t stage, double t_end_ms);
+  double relax(std::size_t transfer, bool relaxed_transfer, int iteration);
+
+  std::vector<Stage> stages_;
+  SchedulerOptions options_;
+  double time_ms_ = 0;
+  SchedulerStats stats_;
+  // Strong coupling, per transfer: raw data of this pass, relaxed data of the previous pass,
+  // previous residual (Aitken).
+  std::vector<std::vector<double>> current_, previous_, previous_residual_;
+  std::vector<double> aitken_;  // Aitken's factor per transfer
+};
+
+}  // namespace systole::coupling
