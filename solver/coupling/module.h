@@ -14,6 +14,8 @@
 //   A module never returns non-finite outputs.
 // - save() keeps an in-memory copy of the whole state (clock included); restore() returns to
 //   it, any number of times. Strong coupling repeats a synchronisation interval this way.
+//   Inputs written by transfers are NOT state: restore() keeps the latest inputs (they are the
+//   new iterate the repeated interval is for).
 #include <string>
 
 namespace systole::coupling {

@@ -58,7 +58,8 @@ double solve_decreasing(F&& f, double x0) {
 
 }  // namespace
 
-Circulation::Circulation(const config::Scenario& s, const ExternalVolumes& external)
+Circulation::Circulation(const config::Scenario& s, const ExternalVolumes& external_in,
+                         const PressureDriven& pressure_driven)
     : p_(s.lumped),
       lv_elastance_{s.lumped.lv.emin_mmhg_per_ml, s.lumped.lv.emax_mmhg_per_ml,
                     ChamberTiming::lv(s)},
@@ -80,8 +81,13 @@ Circulation::Circulation(const config::Scenario& s, const ExternalVolumes& exter
                   : kInf),
       mitral_inertial_(s.lumped.mitral_inertance_mmhg_s2_per_ml > 0),
       aortic_inertial_(s.lumped.aortic_inertance_mmhg_s2_per_ml > 0),
-      lv_external_(external.lv_ml.has_value()),
-      la_external_(external.la_ml.has_value()) {
+      lv_external_(external_in.lv_ml.has_value() && !pressure_driven.lv),
+      la_external_(external_in.la_ml.has_value() && !pressure_driven.la),
+      lv_pressure_driven_(pressure_driven.lv),
+      la_pressure_driven_(pressure_driven.la) {
+  if ((pressure_driven.lv && !external_in.lv_ml) || (pressure_driven.la && !external_in.la_ml))
+    throw std::invalid_argument("Circulation: a pressure-driven chamber needs its initial volume in ExternalVolumes");
+  const ExternalVolumes& external = external_in;
   if (lv_external_ && (mitral_inertial_ || aortic_inertial_))
     throw InputError(
         "an external LV needs lumped.mitral_inertance_mmhg_s2_per_ml = 0 and "
@@ -102,16 +108,18 @@ Circulation::Circulation(const config::Scenario& s, const ExternalVolumes& exter
   lv_elastance_now_ = e_lv;
   la_elastance_now_ = e_la;
   double budget = p_.stressed_blood_volume_ml;
-  if (lv_external_) budget -= *external.lv_ml - p_.lv.v0_ml;
-  if (la_external_) budget -= *external.la_ml - p_.la.v0_ml;
+  if (external.lv_ml) budget -= *external.lv_ml - p_.lv.v0_ml;
+  if (external.la_ml) budget -= *external.la_ml - p_.la.v0_ml;
   const double c_s = p_.systemic_compliance_ml_per_mmhg;
   const double c_pv = p_.pulmonary_venous_compliance_ml_per_mmhg;
-  const double capacity = (lv_external_ ? 0 : 1 / e_lv) + (la_external_ ? 0 : 1 / e_la) + c_pv;
+  const bool lv_given = external.lv_ml.has_value(), la_given = external.la_ml.has_value();
+  const double capacity = (lv_given ? 0 : 1 / e_lv) + (la_given ? 0 : 1 / e_la) + c_pv;
   double p_sa = kInitialSystemicPressure_mmhg;
   double p = (budget - c_s * p_sa) / capacity;
   if (p < 0) p = p_sa = budget / (capacity + c_s);  // too little blood: all at one pressure
-  y_[kLv] = lv_external_ ? *external.lv_ml : p_.lv.v0_ml + p / e_lv;
-  y_[kLa] = la_external_ ? *external.la_ml : p_.la.v0_ml + p / e_la;
+  y_[kLv] = lv_given ? *external.lv_ml : p_.lv.v0_ml + p / e_lv;
+  y_[kLa] = la_given ? *external.la_ml : p_.la.v0_ml + p / e_la;
+  imposed_ = {p, p};
   y_[kSystemic] = c_s * p_sa;
   y_[kPulmonary] = c_pv * p;
   y_[kMitralFlow] = 0;
@@ -177,8 +185,8 @@ Circulation::State Circulation::derivatives(const State& y, double e_lv, double 
                                             const Rates& rates, Readout* out) const {
   const double p_sa = y[kSystemic] / p_.systemic_compliance_ml_per_mmhg;
   const double p_pv = y[kPulmonary] / p_.pulmonary_venous_compliance_ml_per_mmhg;
-  double p_lv = lv_external_ ? 0 : e_lv * (y[kLv] - p_.lv.v0_ml);
-  double p_la = la_external_ ? 0 : e_la * (y[kLa] - p_.la.v0_ml);
+  double p_lv = lv_external_ ? 0 : lv_pressure_driven_ ? imposed_.lv_mmhg : e_lv * (y[kLv] - p_.lv.v0_ml);
+  double p_la = la_external_ ? 0 : la_pressure_driven_ ? imposed_.la_mmhg : e_la * (y[kLa] - p_.la.v0_ml);
   if (lv_external_ || la_external_) solve_external_pressures(p_sa, p_pv, rates, p_lv, p_la);
 
   const double q_pv = (p_pv - p_la) / p_.pulmonary_venous_resistance_mmhg_s_per_ml;
@@ -229,9 +237,9 @@ Circulation::State Circulation::derivatives(const State& y, double e_lv, double 
     out->pulmonary_venous_flow_ml_s = q_pv;
     out->total_volume_ml = y[kLv] + y[kLa] + y[kSystemic] + y[kPulmonary];
     out->lv_outflow_conductance_ml_s_per_mmhg =
-        lv_external_ ? mitral_.conductance_slope(dp_m) + aortic_.conductance_slope(dp_a) : 0;
+        lv_external_ || lv_pressure_driven_ ? mitral_.conductance_slope(dp_m) + aortic_.conductance_slope(dp_a) : 0;
     out->la_outflow_conductance_ml_s_per_mmhg =
-        la_external_
+        la_external_ || la_pressure_driven_
             ? 1.0 / p_.pulmonary_venous_resistance_mmhg_s_per_ml + mitral_.conductance_slope(dp_m)
             : 0;
   }

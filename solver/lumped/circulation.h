@@ -26,6 +26,20 @@ struct ExternalVolumes {
   std::optional<double> la_ml;
 };
 
+// Chambers whose PRESSURE the caller imposes (the 3-D chamber's cavity pressure, solved by the
+// caller so that the mesh volume matches the blood volume: coupling/cavity_constraint.h). Their
+// volume is a state driven by the valve flows, starting from the ExternalVolumes value given to
+// the constructor; the pressure is held over each step (set_imposed_pressures). A chamber is
+// driven by volume OR by pressure, not both.
+struct PressureDriven {
+  bool lv = false;
+  bool la = false;
+};
+struct ImposedPressures {
+  double lv_mmhg = 0;
+  double la_mmhg = 0;
+};
+
 // Everything observable at one instant; all finite.
 struct Readout {
   double time_s = 0;
@@ -41,7 +55,8 @@ struct Readout {
   // V_lv + V_la + stressed volumes of C and C_pv: constant in time for elastance chambers
   // (the flows only move blood around the loop); external chambers add what they impose.
   double total_volume_ml = 0;
-  // External chambers only (0 otherwise): d(net outflow)/d(chamber pressure) at this instant,
+  // External and pressure-driven chambers only (0 otherwise): d(net outflow)/d(chamber
+  // pressure) at this instant,
   // the sum of the slopes of the chamber's in- and outflow laws. A strongly coupled caller
   // estimates d(pressure)/d(volume imposed at the end of a step dt) as 1 / (dt * this).
   double lv_outflow_conductance_ml_s_per_mmhg = 0;
@@ -54,7 +69,12 @@ class Circulation {
   // lumped.stressed_blood_volume_ml (README "Initial state"). Throws InputError when an
   // external chamber is combined with an adjacent valve inertance or with a zero valve leak
   // (both make its pressure undefined), std::invalid_argument for a negative external volume.
-  explicit Circulation(const config::Scenario& scenario, const ExternalVolumes& external = {});
+  explicit Circulation(const config::Scenario& scenario, const ExternalVolumes& external = {},
+                       const PressureDriven& pressure_driven = {});
+
+  // Pressure-driven chambers: their pressures from now on (held over each step).
+  void set_imposed_pressures(const ImposedPressures& p) { imposed_ = p; }
+  const ImposedPressures& imposed_pressures() const { return imposed_; }
 
   // Advances the state from time_s() to time_s() + dt_s with one classical RK4 step.
   // External chambers: external_at_end gives their volumes at the end of the step; within
@@ -70,6 +90,8 @@ class Circulation {
   Readout readout() const;
 
   bool lv_external() const { return lv_external_; }
+  bool lv_pressure_driven() const { return lv_pressure_driven_; }
+  bool la_pressure_driven() const { return la_pressure_driven_; }
   bool la_external() const { return la_external_; }
   double period_s() const { return lv_elastance_.timing.period_s; }
   // Where the activations change formula within one period, sorted, in [0, period); a fixed
@@ -97,7 +119,9 @@ class Circulation {
   Elastance lv_elastance_, la_elastance_;
   SmoothDiode mitral_, aortic_;  // aortic: the valve in series with Zc (README "Valves")
   bool mitral_inertial_, aortic_inertial_;
-  bool lv_external_, la_external_;
+  bool lv_external_, la_external_;            // volume imposed
+  bool lv_pressure_driven_, la_pressure_driven_;  // pressure imposed
+  ImposedPressures imposed_;
   State y_{};
   double time_s_ = 0;
   double lv_elastance_now_ = 0, la_elastance_now_ = 0;  // E(time_s_), reused by the next step
