@@ -222,21 +222,50 @@ void write_metrics_json(const fs::path& file, const RunResult& result) {
   });
 }
 
+namespace {
+const Series* find_series(const RunResult& result, const std::string& name) {
+  for (const Series& s : result.series)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+}  // namespace
+
+bool has_pv_loop(const RunResult& result) {
+  const Series* time = find_series(result, "time_s");
+  const Series* volume = find_series(result, "lv_volume_ml");
+  const Series* pressure = find_series(result, "lv_pressure_mmhg");
+  return time && volume && pressure && volume->values.size() == time->values.size() &&
+         pressure->values.size() == time->values.size();
+}
+
 void write_pv_loop_csv(const fs::path& file, const RunResult& result) {
-  const Series* time = nullptr;
-  const Series* volume = nullptr;
-  const Series* pressure = nullptr;
-  for (const Series& s : result.series) {
-    if (s.name == "time_s") time = &s;
-    if (s.name == "lv_volume_ml") volume = &s;
-    if (s.name == "lv_pressure_mmhg") pressure = &s;
-  }
+  if (!has_pv_loop(result)) throw std::logic_error("write_pv_loop_csv: the result has no LV pressure and volume series");
+  const Series& time = *find_series(result, "time_s");
+  const Series& volume = *find_series(result, "lv_volume_ml");
+  const Series& pressure = *find_series(result, "lv_pressure_mmhg");
   atomic_write(file, [&](const fs::path& tmp) {
     std::ofstream out(tmp);
     out << "time_s,lv_volume_ml,lv_pressure_mmhg\n" << std::setprecision(10);
-    if (time && volume && pressure)
-      for (size_t i = 0; i < time->values.size(); ++i)
-        out << time->values[i] << ',' << volume->values[i] << ',' << pressure->values[i] << '\n';
+    for (size_t i = 0; i < time.values.size(); ++i)
+      out << time.values[i] << ',' << volume.values[i] << ',' << pressure.values[i] << '\n';
+    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+  });
+}
+
+void write_time_series_csv(const fs::path& file, const RunResult& result) {
+  if (result.series.empty()) throw std::logic_error("write_time_series_csv: the result has no series");
+  const size_t rows = result.series.front().values.size();
+  std::vector<const Series*> columns;
+  for (const Series& s : result.series)
+    if (s.values.size() == rows) columns.push_back(&s);
+  atomic_write(file, [&](const fs::path& tmp) {
+    std::ofstream out(tmp);
+    for (size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c]->name;
+    out << '\n' << std::setprecision(10);
+    for (size_t i = 0; i < rows; ++i) {
+      for (size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c]->values[i];
+      out << '\n';
+    }
     if (!out) throw std::runtime_error("cannot write " + tmp.string());
   });
 }
@@ -244,10 +273,18 @@ void write_pv_loop_csv(const fs::path& file, const RunResult& result) {
 std::vector<fs::path> write_results(const fs::path& dir, const RunResult& result,
                                     const Provenance& provenance) {
   fs::create_directories(dir);
-  write_result_h5(dir / "result.h5", result, provenance);
-  write_metrics_json(dir / "metrics.json", result);
-  write_pv_loop_csv(dir / "pv_loop.csv", result);
-  return {dir / "result.h5", dir / "metrics.json", dir / "pv_loop.csv"};
+  std::vector<fs::path> files{dir / "result.h5", dir / "metrics.json"};
+  write_result_h5(files[0], result, provenance);
+  write_metrics_json(files[1], result);
+  if (!result.series.empty()) {
+    files.push_back(dir / "time_series.csv");
+    write_time_series_csv(files.back(), result);
+  }
+  if (has_pv_loop(result)) {
+    files.push_back(dir / "pv_loop.csv");
+    write_pv_loop_csv(files.back(), result);
+  }
+  return files;
 }
 
 }  // namespace systole::io

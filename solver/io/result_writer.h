@@ -1,7 +1,7 @@
 #pragma once
 // Results of one job: result.h5 (time series with units as attributes, per-beat metrics,
 // summary metrics, the scenario JSON and the solver version/revision as provenance; chunked,
-// shuffle + gzip), metrics.json and pv_loop.csv beside it. docs/results.md describes the layout.
+// shuffle + gzip), metrics.json, time_series.csv and pv_loop.csv beside it. docs/results.md describes the layout.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -15,8 +15,9 @@ struct Provenance {
   std::string job_id;         // "" for local runs (systole-solve)
 };
 
-// Writes result.h5, metrics.json and pv_loop.csv into `dir` (created if missing) and returns
-// their paths. Each file is written to a temporary name and renamed, so a reader never sees
+// Writes result.h5 and metrics.json into `dir` (created if missing), time_series.csv when the
+// result has time series, pv_loop.csv when it has the LV pressure and volume series, and
+// returns the paths written. Each file is written to a temporary name and renamed, so a reader never sees
 // a half-written file. Throws std::runtime_error on I/O failure.
 std::vector<std::filesystem::path> write_results(const std::filesystem::path& dir,
                                                  const RunResult& result,
@@ -26,7 +27,12 @@ void write_result_h5(const std::filesystem::path& file, const RunResult& result,
                      const Provenance& provenance);
 void write_metrics_json(const std::filesystem::path& file, const RunResult& result);
 // LV pressure-volume loop of the sampled beats: columns time_s, lv_volume_ml, lv_pressure_mmhg.
+// Throws std::logic_error when has_pv_loop(result) is false.
+bool has_pv_loop(const RunResult& result);
 void write_pv_loop_csv(const std::filesystem::path& file, const RunResult& result);
+// Every series as a column (header = series names, units in the names), one row per sample.
+// Series whose length differs from the first one's are left out (they stay in result.h5).
+void write_time_series_csv(const std::filesystem::path& file, const RunResult& result);
 
 // Reads back what write_result_h5 wrote (tests, tools).
 struct H5Contents {

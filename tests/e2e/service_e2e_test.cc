@@ -60,7 +60,7 @@ TEST_F(ServiceE2E, HealthyJobSucceedsWithResultsAndVerifiedArtifacts) {
 
   std::set<std::string> names;
   for (const auto& a : result.artifacts()) names.insert(a.name());
-  EXPECT_EQ(names, (std::set<std::string>{"metrics.json", "pv_loop.csv", "result.h5"}));
+  EXPECT_EQ(names, (std::set<std::string>{"metrics.json", "pv_loop.csv", "result.h5", "time_series.csv"}));
   // Download result.h5 over gRPC and check its sha256 end to end.
   v1::DownloadArtifactRequest dl;
   dl.set_id(id);
@@ -282,7 +282,7 @@ TEST_F(ServiceE2E, IdenticalScenarioReusesTheFinishedResultUnlessNoCache) {
   v1::Result result;
   auto context = deadline_context();
   ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
-  EXPECT_EQ(result.artifacts_size(), 3);
+  EXPECT_EQ(result.artifacts_size(), 4);  // result.h5, metrics.json, time_series.csv, pv_loop.csv
   // no_cache runs it again.
   v1::SubmitJobRequest fresh;
   *fresh.mutable_scenario() = scenario_from_json({{"heart_rate_bpm", 66}});

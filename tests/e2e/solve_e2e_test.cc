@@ -25,6 +25,34 @@ TEST(SolveE2E, SerialAndTwoRanksWriteTheSameResults) {
   fs::remove_all(dir);
 }
 
+TEST(SolveE2E, PlotBeatDrawsTheWiggersDiagramAndThePvLoop) {
+  const std::string plot = (bin_dir() / "systole-plot-beat").string();
+  ASSERT_TRUE(fs::exists(plot)) << plot;
+  const auto [check, why] = run_command(plot + " --check");
+  if (check != 0) GTEST_SKIP() << "matplotlib not installed: " << why;
+  const fs::path dir = make_temp_dir("plot-beat");
+  const auto [c1, out1] = run_command((bin_dir() / "systole-solve").string() + " " +
+                                      (source_dir() / "examples/healthy-0d.json").string() + " --quiet --out " +
+                                      dir.string());
+  ASSERT_EQ(c1, 0) << out1;
+  ASSERT_TRUE(fs::exists(dir / "time_series.csv"));
+  const auto [code, out] = run_command(plot + " " + dir.string());
+  ASSERT_EQ(code, 0) << out;
+  for (const char* name : {"wiggers.png", "pv_loop.png"}) {
+    ASSERT_TRUE(fs::exists(dir / name)) << out;
+    EXPECT_GT(fs::file_size(dir / name), 10000u) << name;
+    std::ifstream png(dir / name, std::ios::binary);
+    char magic[4] = {};
+    png.read(magic, 4);
+    EXPECT_EQ(std::string(magic + 1, 3), "PNG") << name;
+  }
+  // Not a result directory: exit 2, naming the missing file.
+  const auto [bad, message] = run_command(plot + " " + (dir / "nowhere").string() + " 2>&1");
+  EXPECT_EQ(bad, 2) << message;
+  EXPECT_NE(message.find("time_series.csv not found"), std::string::npos) << message;
+  fs::remove_all(dir);
+}
+
 TEST(SolveE2E, BadInputExitsTwoNamingTheField) {
   const std::string solve = (bin_dir() / "systole-solve").string();
   const std::string scenario = (source_dir() / "examples/healthy-0d.json").string();

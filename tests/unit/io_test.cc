@@ -32,7 +32,7 @@ TEST(ResultWriter, H5RoundTripWithUnitsAndProvenance) {
   const auto dir = std::filesystem::temp_directory_path() / ("systole-io-" + std::to_string(std::random_device{}()));
   const RunResult r = sample_result();
   const auto files = write_results(dir, r, {R"({"heart_rate_bpm":70})", "j-test"});
-  ASSERT_EQ(files.size(), 3u);
+  ASSERT_EQ(files.size(), 4u);  // result.h5, metrics.json, time_series.csv, pv_loop.csv
   for (const auto& f : files) EXPECT_TRUE(std::filesystem::exists(f)) << f;
   EXPECT_FALSE(std::filesystem::exists(dir / "result.h5.tmp"));
   const H5Contents c = read_result_h5(dir / "result.h5");
@@ -73,6 +73,29 @@ TEST(ResultWriter, H5RoundTripWithUnitsAndProvenance) {
   std::getline(csv, first);
   EXPECT_EQ(header, "time_s,lv_volume_ml,lv_pressure_mmhg");
   EXPECT_EQ(first, "0,120,10");
+  std::ifstream series_csv(dir / "time_series.csv");
+  std::getline(series_csv, header);
+  std::getline(series_csv, first);
+  EXPECT_EQ(header, "time_s,lv_pressure_mmhg,lv_volume_ml");
+  EXPECT_EQ(first, "0,10,120");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ResultWriter, NoPvLoopFileWithoutLvSeriesAndNoSeriesFileWithoutSeries) {
+  const auto dir = std::filesystem::temp_directory_path() / ("systole-io-" + std::to_string(std::random_device{}()));
+  RunResult r;
+  r.metrics["f"] = 1.5;
+  auto files = write_results(dir, r, {"{}", ""});
+  EXPECT_EQ(files.size(), 2u);
+  EXPECT_FALSE(std::filesystem::exists(dir / "pv_loop.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "time_series.csv"));
+  r.series.push_back({"time_s", "s", {0, 1}});
+  r.series.push_back({"kinetic_energy", "", {2, 3}});
+  files = write_results(dir, r, {"{}", ""});
+  EXPECT_EQ(files.size(), 3u);
+  EXPECT_FALSE(std::filesystem::exists(dir / "pv_loop.csv"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "time_series.csv"));
+  EXPECT_THROW(write_pv_loop_csv(dir / "x.csv", r), std::logic_error);
   std::filesystem::remove_all(dir);
 }
 
