@@ -48,7 +48,8 @@ std::vector<Param> build_table() {
   const double inf = std::numeric_limits<double>::infinity();
   (void)inf;
   const std::vector<std::string_view> cell_models{"ttp06", "fhn", "aliev_panfilov",
-                                                  "mitchell_schaeffer"};
+                                                  "mitchell_schaeffer", "ttp06_endo", "ttp06_mid",
+                                                  "ttp06_epi"};
   std::vector<Param> t;
   // --- run control ---------------------------------------------------------------------
   {
@@ -154,6 +155,32 @@ std::vector<Param> build_table() {
                                     "Stimulus duration (Bachmann bundle, His bundle)."));
   t.push_back(SYSTOLE_REAL(electro.stimulus.amplitude_ua_per_cm2, "uA/cm^2", 35, 0, 1000,
                            "Stimulus amplitude."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.stimulus.box_size_mm, "mm", 1.5, 0, 1000,
+                                    "Scene 'electro', sheet/slab meshes: edge of the cubic stimulus box at the "
+                                    "origin corner (Niederer et al. 2011: 1.5 mm)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.time_step_ms, "ms", 0.05, 0, 1,
+                                    "Electrophysiology time step (reaction and diffusion); must not exceed the "
+                                    "cell models' largest stable step (ttp06 0.1 ms, mitchell_schaeffer 0.1 ms)."));
+  t.push_back(SYSTOLE_CHOICE(electro.splitting, "godunov",
+                             (std::vector<std::string_view>{"godunov", "strang"}),
+                             "Operator splitting: godunov (reaction, then backward-Euler diffusion) or strang "
+                             "(half Crank-Nicolson diffusion, reaction, half diffusion)."));
+  t.push_back(SYSTOLE_CHOICE(electro.mesh, "left_heart",
+                             (std::vector<std::string_view>{"left_heart", "sheet", "slab"}),
+                             "Scene 'electro': the procedural left heart (LV + LA walls, triangles), a flat "
+                             "sheet of triangles or a box slab of tetrahedra (electro.mesh_*)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.mesh_size_x_mm, "mm", 20, 0, 1000,
+                                    "Sheet/slab size in x (Niederer et al. 2011 slab: 20 x 7 x 3 mm)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.mesh_size_y_mm, "mm", 7, 0, 1000, "Sheet/slab size in y."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.mesh_size_z_mm, "mm", 3, 0, 1000, "Slab size in z (not used by the sheet)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.mesh_spacing_mm, "mm", 0.5, 0, 100, "Sheet/slab node spacing."));
+  t.push_back(SYSTOLE_REAL(electro.fibre_angle_deg, "deg", 0, -180, 180,
+                           "Sheet/slab fibre direction, angle from +x in the x-y plane."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.end_time_ms, "ms", 60, 0, 1e6,
+                                    "Scene 'electro', sheet/slab: simulated time (the left heart runs `beats` "
+                                    "periods of the heart rate)."));
+  t.push_back(SYSTOLE_REAL(electro.activation_threshold_mv, "mV", -40, -100, 50,
+                           "Activation time: upward crossing of this potential (ours)."));
   // --- fluid (eq 1-10, MODEL.md §3) ------------------------------------------------------
   t.push_back(SYSTOLE_REAL(fluid.kinematic_viscosity_m2_per_s, "m^2/s", 4.8e-6, 1e-8, 0.1,
                            "Newtonian kinematic viscosity; Re = U_m d_m / nu = 0.0144 m^2/s / nu (seed blood "
@@ -299,6 +326,63 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(analytic.x3, "", 0, -10, 10, "Input x3."));
   t.push_back(SYSTOLE_REAL(analytic.a, "", 7, -100, 100, "Ishigami a (benchmark value 7)."));
   t.push_back(SYSTOLE_REAL(analytic.b, "", 0.1, -100, 100, "Ishigami b (benchmark value 0.1)."));
+  // --- structure and scene "mechanics" (solver/structure/README.md) ---------------------
+  t.push_back(SYSTOLE_CHOICE(structure.law, "fung",
+                             (std::vector<std::string_view>{"fung", "linear", "neo_hookean"}),
+                             "In-plane spring law of every tissue (eq 17 'fung'; 'linear' and 'neo_hookean' share its "
+                             "small-strain modulus c alpha)."));
+  t.push_back(SYSTOLE_CHOICE(structure.body, "sphere",
+                             (std::vector<std::string_view>{"sphere", "sheet", "left_heart", "lv"}),
+                             "Scene 'mechanics': the body - a closed spherical shell, a square sheet clamped on its "
+                             "edges, the LV and LA of the procedural heart anchored at the valvular plane, or its LV alone."));
+  t.push_back(SYSTOLE_BOOL(structure.bending, true, "Bending springs on interior edges (eq 19)."));
+  t.push_back(SYSTOLE_REAL(structure.damping_per_ms, "1/ms", 0.1, 0, 100,
+                           "Mass-proportional damping gamma in m x'' = F - gamma m x' (ours; 0: none)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.time_step_safety, "", 0.9, 0, 1,
+                                    "Substep = safety x 2 / omega_max (Gershgorin bound of the tangent stiffness)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.strain_limit, "", 0.6, 0, 0.99,
+                                    "An edge strain |(l - l0)/l| beyond this stops the run as unstable."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.end_time_ms, "ms", 100, 0, 1e6, "Scene 'mechanics': simulated time."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.output_interval_ms, "ms", 5, 0, 1e5,
+                                    "Scene 'mechanics': outer step (loads updated, series sampled, positions written)."));
+  t.push_back(SYSTOLE_REAL(structure.cavity_pressure_mmhg, "mmHg", 5, -50, 300,
+                           "Scene 'mechanics': cavity pressure (normal load p A n / 3 per node of each triangle; "
+                           "on a sheet, the pressure difference across it)."));
+  t.push_back(SYSTOLE_REAL(structure.pressure_ramp_ms, "ms", 20, 0, 1e5,
+                           "Scene 'mechanics': pressure and active tension rise linearly over this time."));
+  t.push_back(SYSTOLE_REAL(structure.active_tension_kpa, "kPa", 0, 0, 1000,
+                           "Scene 'mechanics': uniform active fibre tension (eq 24) on every node (left heart: LV and LA)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.sphere_radius_mm, "mm", 20, 0, 200, "Body 'sphere': radius."));
+  t.push_back(SYSTOLE_INT(structure.sphere_refinement, "", 3, 0, 7,
+                          "Body 'sphere': icosahedron subdivisions (10 * 4^n + 2 nodes)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.shell_thickness_mm, "mm", 2, 0, 50, "Bodies 'sphere' and 'sheet': thickness."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.sheet_size_mm, "mm", 20, 0, 500, "Body 'sheet': side of the square."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.sheet_edge_mm, "mm", 1, 0, 50, "Body 'sheet': edge length."));
+  t.push_back(SYSTOLE_BOOL(structure.write_positions, true,
+                           "Scene 'mechanics': node positions at every outer step to structure.h5 + .xmf."));
+  // --- scene "ibm": immersed-boundary verification (nondimensional: D, U, D/U) -----------
+  t.push_back(SYSTOLE_CHOICE(ibm.verification_case, "fixed_sphere",
+                             (std::vector<std::string_view>{"fixed_sphere", "oscillating_sphere", "womersley_pipe"}),
+                             "Scene 'ibm': which verification flow (docs/ibm.md)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(ibm.reynolds, "", 20, 0, 1e5, "Scene 'ibm': Re = U D / nu."));
+  t.push_back(SYSTOLE_REAL(ibm.diameter_cells, "", 8, 4, 128, "Scene 'ibm': body diameter in grid cells (D / h)."));
+  t.push_back(SYSTOLE_REAL(ibm.box_diameters, "", 3, 1.5, 32,
+                           "Scene 'ibm', sphere cases: box side in diameters (fixed_sphere: y and z; sets the blockage)."));
+  t.push_back(SYSTOLE_REAL(ibm.box_length_diameters, "", 6, 6, 64,
+                           "Scene 'ibm', fixed_sphere: streamwise box length in diameters (fringe 1.5 D, sphere at 4 D)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(ibm.end_time_convective, "D/U", 1, 0, 1e4,
+                                    "Scene 'ibm': simulated time (oscillating_sphere, womersley_pipe: whole periods)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(ibm.oscillation_frequency, "U/D", 1, 0, 100,
+                                    "Scene 'ibm', oscillating_sphere: cycles per D/U."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(ibm.oscillation_amplitude_diameters, "", 0.01, 0, 0.5,
+                                    "Scene 'ibm', oscillating_sphere: amplitude A / D."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(ibm.womersley_number, "", 4, 0, 15,
+                                    "Scene 'ibm', womersley_pipe: Wo = R sqrt(omega / nu)."));
+  t.push_back(SYSTOLE_INT(ibm.forcing_iterations, "", 1, 1, 20,
+                          "Scene 'ibm': direct-forcing passes per step (1 = the seed; more = multi-direct forcing)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(ibm.cfl, "", 0.2, 0, 1, "Scene 'ibm': target CFL number."));
+  t.push_back(SYSTOLE_BOOL(ibm.write_fields, false,
+                           "Scene 'ibm': fields (ibm_fields.h5 + .xmf) and markers (ibm_markers.csv) at the end."));
   return t;
 }
 

@@ -12,13 +12,13 @@ namespace systole::config {
 
 const std::vector<std::string>& known_scenes() {
   static const std::vector<std::string> scenes{"lumped", "analytic", "geometry", "electro", "mechanics",
-                                               "electromechanics", "fluid", "fsi", "fsei"};
+                                               "electromechanics", "fluid", "fsi", "fsei", "ibm"};
   return scenes;
 }
 
 // Updated as each scene lands (its issue); see solver/scene/.
 const std::vector<std::string>& implemented_scenes() {
-  static const std::vector<std::string> scenes{"lumped", "analytic", "fluid"};
+  static const std::vector<std::string> scenes{"lumped", "analytic", "fluid", "electro", "mechanics", "ibm"};
   return scenes;
 }
 
@@ -281,12 +281,11 @@ nlohmann::json to_json(const Scenario& scenario) {
   Scenario s = scenario;  // accessors take non-const references
   nlohmann::json out = nlohmann::json::object();
   for (const Param& p : parameter_table()) {
-    nlohmann::json::json_pointer ptr("/" + [&] {
-      std::string path(p.path);
-      for (char& c : path)
-        if (c == '.') c = '/';
-      return path;
-    }());
+    std::string pointer_path = "/";  // built by appending: GCC 12's -Wrestrict misfires on "/" + string
+    pointer_path += p.path;
+    for (char& c : pointer_path)
+      if (c == '.') c = '/';
+    nlohmann::json::json_pointer ptr(pointer_path);
     switch (p.kind) {
       case Kind::kReal: out[ptr] = p.real(s); break;
       case Kind::kInt: out[ptr] = p.integer(s); break;

@@ -41,6 +41,7 @@ struct Geometry {
 struct Stimulus {
   double duration_ms;
   double amplitude_ua_per_cm2;
+  double box_size_mm;
 };
 
 struct Electro {
@@ -51,6 +52,14 @@ struct Electro {
   double sigma_i_fibre_ms_per_cm, sigma_i_cross_ms_per_cm;
   std::string lv_cell_model, la_cell_model;
   Stimulus stimulus;
+  double time_step_ms;
+  std::string splitting;
+  std::string mesh;
+  double mesh_size_x_mm, mesh_size_y_mm, mesh_size_z_mm;
+  double mesh_spacing_mm;
+  double fibre_angle_deg;
+  double end_time_ms;
+  double activation_threshold_mv;
 };
 
 struct Fluid {
@@ -115,6 +124,44 @@ struct Analytic {
   double a, b;
 };
 
+// Scene "mechanics" and the structure module (solver/structure/README.md).
+struct Structure {
+  std::string law;
+  std::string body;
+  bool bending;
+  double damping_per_ms;
+  double time_step_safety;
+  double strain_limit;
+  double end_time_ms;
+  double output_interval_ms;
+  double cavity_pressure_mmhg;
+  double pressure_ramp_ms;
+  double active_tension_kpa;
+  double sphere_radius_mm;
+  int sphere_refinement;
+  double shell_thickness_mm;
+  double sheet_size_mm;
+  double sheet_edge_mm;
+  bool write_positions;
+};
+
+// Scene "ibm": immersed-boundary verification flows (solver/scene/ibm_scene.h), nondimensional
+// (D, U, D/U).
+struct Ibm {
+  std::string verification_case;
+  double reynolds;
+  double diameter_cells;
+  double box_diameters;
+  double box_length_diameters;
+  double end_time_convective;
+  double oscillation_frequency;
+  double oscillation_amplitude_diameters;
+  double womersley_number;
+  int forcing_iterations;
+  double cfl;
+  bool write_fields;
+};
+
 struct Scenario {
   std::string scene;
   double heart_rate_bpm;
@@ -129,6 +176,8 @@ struct Scenario {
   Coupling coupling;
   Outputs outputs;
   Analytic analytic;
+  Structure structure;
+  Ibm ibm;
 
   double period_ms() const { return 60000.0 / heart_rate_bpm; }
 };

@@ -10,6 +10,9 @@
 #include "solver/core/units.h"
 #include "solver/fluid/verification_cases.h"
 #include "solver/lumped/simulate.h"
+#include "solver/scene/electro_scene.h"
+#include "solver/scene/ibm_scene.h"
+#include "solver/scene/mechanics_scene.h"
 #include "uq/ishigami.h"
 
 namespace systole::scene {
@@ -124,6 +127,9 @@ const std::vector<std::string>& metric_names(const std::string& scene) {
   if (scene == "lumped") return lumped;
   if (scene == "analytic") return analytic;
   if (scene == "fluid") return fluid;
+  if (scene == "electro") return electro_metric_names();
+  if (scene == "mechanics") return mechanics_metric_names();
+  if (scene == "ibm") return ibm_metric_names();
   return none;
 }
 
@@ -136,9 +142,17 @@ RunResult run(const config::Scenario& scenario, RunControl& control) {
     result = run_analytic(scenario, control);
   } else if (scenario.scene == "fluid") {
     result = run_fluid(scenario, control);
+  } else if (scenario.scene == "electro") {
+    result = run_electro(scenario, control);
+  } else if (scenario.scene == "mechanics") {
+    result = run_mechanics(scenario, control);
+  } else if (scenario.scene == "ibm") {
+    result = run_ibm(scenario, control);
   } else {
     // parse_scenario() already rejects unimplemented scenes; this guards direct callers.
-    throw InputError("scene '" + scenario.scene + "' is not implemented yet; implemented: lumped, analytic, fluid");
+    std::string list;
+    for (const auto& name : config::implemented_scenes()) list += (list.empty() ? "" : ", ") + name;
+    throw InputError("scene '" + scenario.scene + "' is not implemented yet; implemented: " + list);
   }
   result.metrics["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -1,7 +1,9 @@
 #pragma once
 // The composition root: a scenario names a scene, and the scene assembles exactly the
 // physics modules it needs. Today: "lumped" (0-D closed-loop left heart, solver/lumped),
-// "analytic" (closed-form test functions) and "fluid" (the verification flows of solver/fluid).
+// "analytic" (closed-form test functions), "fluid" (the verification flows of solver/fluid),
+// "electro" (solver/electro alone), "mechanics" (solver/structure alone) and "ibm" (fluid +
+// immersed boundary verification flows). solver/scene/README.md lists what each assembles.
 // Every rank of an MPI worker calls run() with the same scenario; RunControl is how the
 // caller sees progress and asks for a stop.
 #include <filesystem>

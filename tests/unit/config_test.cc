@@ -115,7 +115,7 @@ TEST(Config, CrossFieldRules) {
 
 TEST(Config, UnimplementedSceneIsAnErrorNotAFallback) {
   const std::string e = error_of({{"scene", "fsei"}});
-  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic, fluid"), std::string::npos) << e;
+  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic, fluid, electro, mechanics, ibm"), std::string::npos) << e;
   EXPECT_NE(error_of({{"scene", "warp"}}).find("unknown scene 'warp'; known: lumped"), std::string::npos);
 }
 
@@ -186,7 +186,9 @@ TEST(Config, ProtoAndParameterTableAgree) {
       case Kind::kRealList: EXPECT_TRUE(field->is_repeated() && field->cpp_type() == FD::CPPTYPE_DOUBLE) << path; break;
       case Kind::kChoiceList: EXPECT_TRUE(field->is_repeated() && field->cpp_type() == FD::CPPTYPE_STRING) << path; break;
     }
-    if (!field->is_repeated()) EXPECT_TRUE(field->has_presence()) << path << " must be `optional` so defaults apply";
+    if (!field->is_repeated()) {
+      EXPECT_TRUE(field->has_presence()) << path << " must be `optional` so defaults apply";
+    }
   }
   for (const auto& path : table) EXPECT_TRUE(proto.count(path)) << "table row " << path << " is not in scenario.proto";
 }

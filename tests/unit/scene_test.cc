@@ -27,12 +27,17 @@ class MpiEnvironment final : public ::testing::Environment {
 const auto* const mpi_environment = ::testing::AddGlobalTestEnvironment(new MpiEnvironment);
 
 TEST(Scene, AdvertisedMetricsAreProduced) {
-  for (const std::string scene : {"lumped", "analytic", "fluid"}) {
+  for (const std::string scene : {"lumped", "analytic", "fluid", "electro", "mechanics", "ibm"}) {
     // The default fluid scenario is the seed's grid 1 (128x128x144 cells, ~30 s): this test
     // takes a small grid and a short run of the default case instead (deliberately).
     const nlohmann::json small_fluid{{"nx", 17}, {"ny", 17}, {"nz", 9}, {"end_time_ms", 8}};
-    config::Scenario s = config::parse_scenario(scene == "fluid" ? nlohmann::json{{"scene", scene}, {"fluid", small_fluid}}
-                                                                 : nlohmann::json{{"scene", scene}});
+    // The default electro scenario is the whole left heart over beats: a small sheet instead.
+    const nlohmann::json small_electro{{"mesh", "sheet"}, {"mesh_size_x_mm", 4}, {"mesh_size_y_mm", 2},
+                                       {"end_time_ms", 10}, {"model", "monodomain"}};
+    config::Scenario s = config::parse_scenario(
+        scene == "fluid"     ? nlohmann::json{{"scene", scene}, {"fluid", small_fluid}}
+        : scene == "electro" ? nlohmann::json{{"scene", scene}, {"electro", small_electro}}
+                             : nlohmann::json{{"scene", scene}});
     Quiet control;
     const RunResult r = run(s, control);
     ASSERT_FALSE(metric_names(scene).empty()) << scene;

@@ -1,0 +1,79 @@
+// Cost of the immersed-boundary stages per marker per step on the default left heart
+// (solver/geometry build_left_heart, every body, markers at 0.7 h) on the seed's grid 1
+// (128×128×144 cells) and grid 2 (192×192×256 cells): stencil rebuild (moving bodies), velocity
+// interpolation, spreading, one direct-forcing pass (interpolate + spread), loads (probes with
+// MLS gradients, eq 11–14, 27). One rank; best of `repeats` timings. Usage: ibm_cost_bench [repeats=3]
+#include <mpi.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+
+#include "solver/config/scenario.h"
+#include "solver/geometry/left_heart.h"
+#include "solver/ibm/forcing.h"
+#include "solver/ibm/loads.h"
+
+namespace {
+using namespace systole;
+double best_seconds(int repeats, const std::function<void()>& f) {
+  double best = 1e300;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return best;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  const int repeats = argc > 1 ? std::atoi(argv[1]) : 3;
+  const config::Scenario sc = config::default_scenario();
+  const geometry::LeftHeart heart = geometry::build_left_heart(sc.geometry, sc.fluid);
+  const double unit_mm = 24.0;  // d_m
+  struct G { const char* name; int nx, ny, nz; };
+  for (const G& gs : {G{"grid 1", 128, 128, 144}, G{"grid 2", 192, 192, 256}}) {
+    const grid::Grid g({gs.nx, gs.ny, gs.nz, sc.fluid.box_x_mm / unit_mm, sc.fluid.box_y_mm / unit_mm,
+                        sc.fluid.box_z_mm / unit_mm});
+    const grid::Slabs slabs(g, MPI_COMM_WORLD);
+    ibm::Markers markers(g);
+    for (const geometry::TriMesh& body : heart.bodies) {
+      ibm::BodyOptions o;
+      o.mm_per_unit = unit_mm;
+      o.sides = body.kind == geometry::BodyKind::kLeaflet ? ibm::Sides::two : ibm::Sides::one;
+      markers.add_body(body, body.name, o);
+    }
+    grid::XFaceField u(slabs), fu(slabs);
+    grid::YFaceField v(slabs), fv(slabs);
+    grid::ZFaceField w(slabs), fw(slabs);
+    grid::CellField p(slabs);
+    u.fill(0.3);
+    v.fill(-0.1);
+    w.fill(0.2);
+    p.fill(1.0);
+    ibm::DirectForcing forcing(slabs, markers, {});
+    const double n = static_cast<double>(markers.size());
+    std::vector<ibm::Vec3> F(markers.size(), ibm::Vec3(1, 2, 3));
+    ibm::Transfer& t = const_cast<ibm::Transfer&>(forcing.transfer());
+    const double rebuild = best_seconds(repeats, [&] { t.rebuild(); });
+    const double interp = best_seconds(repeats, [&] { (void)t.interpolate({u, v, w}); });
+    const double spread = best_seconds(repeats, [&] { t.spread(F, {fu, fv, fw}); });
+    const double apply = best_seconds(repeats, [&] { forcing.apply(0.01, {u, v, w}, {fu, fv, fw}); });
+    const double loads = best_seconds(repeats, [&] { (void)ibm::compute_loads(t, {u, v, w}, p, 3000); });
+    std::printf("%s (%d x %d x %d cells, h = %.4f mm): %zu markers in %zu bodies\n", gs.name, gs.nx, gs.ny, gs.nz,
+                markers.h() * unit_mm, markers.size(), markers.bodies().size());
+    for (const auto& b : markers.bodies())
+      std::printf("   %-18s tiling level %d, %zu markers\n", b.name.c_str(), b.tiling_level, b.marker_count);
+    std::printf("  stencil rebuild   %8.3f ms  %6.1f ns/marker\n", 1e3 * rebuild, 1e9 * rebuild / n);
+    std::printf("  interpolation     %8.3f ms  %6.1f ns/marker\n", 1e3 * interp, 1e9 * interp / n);
+    std::printf("  spreading         %8.3f ms  %6.1f ns/marker\n", 1e3 * spread, 1e9 * spread / n);
+    std::printf("  forcing pass      %8.3f ms  %6.1f ns/marker\n", 1e3 * apply, 1e9 * apply / n);
+    std::printf("  loads + WSS       %8.3f ms  %6.1f ns/marker\n", 1e3 * loads, 1e9 * loads / n);
+    std::printf("  IB stage (rebuild + forcing + loads) %8.3f ms per step\n", 1e3 * (rebuild + apply + loads));
+  }
+  MPI_Finalize();
+  return 0;
+}

@@ -1,0 +1,262 @@
+#include "solver/electro/tissue.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "solver/core/errors.h"
+
+namespace systole::electro {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// [[A, B], [B^T, C]] with the rows/columns in `pinned` (indices into the full block) replaced
+// by the identity: the pinned unknowns are fixed to 0 and the matrix stays symmetric.
+SparseMatrix block_with_pins(const SparseMatrix& A, const SparseMatrix& B, const SparseMatrix& C,
+                             const std::vector<std::int32_t>& pinned) {
+  const Eigen::Index n = A.rows();
+  std::vector<char> is_pinned(static_cast<std::size_t>(2 * n), 0);
+  for (auto p : pinned) is_pinned[p] = 1;
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<std::size_t>(A.nonZeros() + 2 * B.nonZeros() + C.nonZeros()));
+  auto add = [&](const SparseMatrix& M, Eigen::Index r0, Eigen::Index c0, bool transpose) {
+    for (Eigen::Index k = 0; k < M.outerSize(); ++k)
+      for (SparseMatrix::InnerIterator it(M, k); it; ++it) {
+        Eigen::Index r = it.row() + r0, c = it.col() + c0;
+        if (transpose) std::swap(r, c);
+        if (is_pinned[r] || is_pinned[c]) continue;
+        t.emplace_back(r, c, it.value());
+      }
+  };
+  add(A, 0, 0, false);
+  add(B, 0, n, false);
+  add(B, 0, n, true);
+  add(C, n, n, false);
+  for (auto p : pinned) t.emplace_back(p, p, 1.0);
+  SparseMatrix out(2 * n, 2 * n);
+  out.setFromTriplets(t.begin(), t.end());
+  out.makeCompressed();
+  return out;
+}
+
+std::unique_ptr<Eigen::SimplicialLDLT<SparseMatrix>> factorise(const SparseMatrix& A, const char* what) {
+  auto s = std::make_unique<Eigen::SimplicialLDLT<SparseMatrix>>(A);
+  if (s->info() != Eigen::Success)
+    throw InstabilityError("electro", what, 0.0, "sparse LDLT factorisation failed");
+  return s;
+}
+
+}  // namespace
+
+Formulation formulation_from_name(const std::string& name) {
+  if (name == "monodomain") return Formulation::kMonodomain;
+  if (name == "bidomain") return Formulation::kBidomain;
+  throw InputError("electro.model = '" + name + "' is unknown; known: monodomain, bidomain");
+}
+
+Splitting splitting_from_name(const std::string& name) {
+  if (name == "godunov") return Splitting::kGodunov;
+  if (name == "strang") return Splitting::kStrang;
+  throw InputError("electro.splitting = '" + name + "' is unknown; known: godunov, strang");
+}
+
+Conductivity monodomain_conductivity(const Conductivity& i, const Conductivity& e) {
+  return {i.fibre_ms_per_cm * e.fibre_ms_per_cm / (i.fibre_ms_per_cm + e.fibre_ms_per_cm),
+          i.cross_ms_per_cm * e.cross_ms_per_cm / (i.cross_ms_per_cm + e.cross_ms_per_cm)};
+}
+
+TissueSolver::TissueSolver(ElectroMesh mesh, TissueOptions options)
+    : mesh_(std::move(mesh)),
+      options_(std::move(options)),
+      activation_({}, options_.activation_threshold_mv),
+      tension_(0, default_tension_params(options_.tension_k_kpa)) {
+  mesh_.check();
+  const std::size_t n = mesh_.node_count();
+  auto positive = [](double v, const char* field, const char* unit) {
+    if (!(v > 0)) {
+      std::ostringstream os;
+      os << field << " = " << v << " " << unit << " must be > 0";
+      throw InputError(os.str());
+    }
+  };
+  positive(options_.dt_ms, "electro.time_step_ms", "ms");
+  positive(options_.chi_per_cm, "electro.surface_to_volume_per_cm", "1/cm");
+  positive(options_.cm_uf_per_cm2, "electro.membrane_capacitance_uf_per_cm2", "uF/cm^2");
+  positive(options_.sigma_i.fibre_ms_per_cm, "electro.sigma_i_fibre_ms_per_cm", "mS/cm");
+  positive(options_.sigma_i.cross_ms_per_cm, "electro.sigma_i_cross_ms_per_cm", "mS/cm");
+  positive(options_.sigma_e.fibre_ms_per_cm, "electro.sigma_e_fibre_ms_per_cm", "mS/cm");
+  positive(options_.sigma_e.cross_ms_per_cm, "electro.sigma_e_cross_ms_per_cm", "mS/cm");
+  if (options_.domain_cell_models.size() != mesh_.domain_names.size()) {
+    std::ostringstream os;
+    os << "electro: " << options_.domain_cell_models.size() << " cell models given for "
+       << mesh_.domain_names.size() << " mesh domains";
+    throw InputError(os.str());
+  }
+
+  // --- cell models, one per domain ---
+  domains_.resize(mesh_.domain_names.size());
+  for (std::size_t i = 0; i < n; ++i) domains_[mesh_.node_domain[i]].nodes.push_back(static_cast<std::int32_t>(i));
+  rest_.assign(n, 0.0);
+  peak_.assign(n, 0.0);
+  vm_.assign(n, 0.0);
+  ue_.assign(n, 0.0);
+  for (std::size_t d = 0; d < domains_.size(); ++d) {
+    Domain& dom = domains_[d];
+    dom.model = ionic::make_cell_model(options_.domain_cell_models[d], dom.nodes.size());
+    if (options_.dt_ms > dom.model->max_stable_dt_ms() * (1 + 1e-12)) {
+      std::ostringstream os;
+      os << "electro.time_step_ms = " << options_.dt_ms << " is too large for cell model '" << dom.model->name()
+         << "' (domain " << mesh_.domain_names[d] << "): its largest stable step is "
+         << dom.model->max_stable_dt_ms() << " ms";
+      throw InputError(os.str());
+    }
+    dom.vm.assign(dom.nodes.size(), 0.0);
+    dom.iion.assign(dom.nodes.size(), 0.0);
+    for (auto i : dom.nodes) {
+      rest_[i] = dom.model->resting_potential_mv();
+      peak_[i] = dom.model->peak_potential_mv();
+      vm_[i] = rest_[i];
+    }
+  }
+  for (const StimulusSpec& s : options_.stimuli) stimuli_.emplace_back(mesh_, s);
+  activation_ = ActivationTracker(rest_, options_.activation_threshold_mv);
+  tension_ = ActiveTension(n, default_tension_params(options_.tension_k_kpa));
+
+  // --- operators (reference configuration, once) ---
+  mass_ = assemble_mass(mesh_);
+  lumped_ = mass_ * Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n));
+  const double c = options_.chi_per_cm * options_.cm_uf_per_cm2;
+  const double dts[2] = {options_.dt_ms, 0.5 * options_.dt_ms};
+  const double thetas[2] = {1.0, 0.5};
+  const int needed = options_.splitting == Splitting::kGodunov ? 0 : 1;
+  if (options_.formulation == Formulation::kMonodomain) {
+    k_mono_ = assemble_stiffness(mesh_, monodomain_conductivity(options_.sigma_i, options_.sigma_e));
+    const SparseMatrix A = SparseMatrix(mass_ * (c / dts[needed])) + SparseMatrix(k_mono_ * thetas[needed]);
+    solve_[needed] = factorise(A, "monodomain diffusion");
+  } else {
+    k_i_ = assemble_stiffness(mesh_, options_.sigma_i);
+    k_sum_ = SparseMatrix(k_i_ + assemble_stiffness(mesh_, options_.sigma_e));
+    component_ = mesh_.components();
+    std::vector<char> seen;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto comp = static_cast<std::size_t>(component_[i]);
+      if (comp >= seen.size()) seen.resize(comp + 1, 0);
+      if (!seen[comp]) {
+        seen[comp] = 1;
+        pinned_.push_back(static_cast<std::int32_t>(i));
+      }
+    }
+    std::vector<std::int32_t> pins_block;
+    for (auto p : pinned_) pins_block.push_back(p + static_cast<std::int32_t>(n));
+    const double th = thetas[needed];
+    const SparseMatrix A = SparseMatrix(mass_ * (c / dts[needed])) + SparseMatrix(k_i_ * th);
+    solve_[needed] = factorise(block_with_pins(A, SparseMatrix(k_i_ * th), SparseMatrix(k_sum_ * th), pins_block),
+                               "bidomain block system");
+    if (options_.splitting == Splitting::kStrang) {
+      // (K_i + K_e) with the same pins, for the explicit half of Crank–Nicolson.
+      std::vector<Eigen::Triplet<double>> t;
+      std::vector<char> is_pinned(n, 0);
+      for (auto p : pinned_) is_pinned[p] = 1;
+      for (Eigen::Index k = 0; k < k_sum_.outerSize(); ++k)
+        for (SparseMatrix::InnerIterator it(k_sum_, k); it; ++it)
+          if (!is_pinned[it.row()] && !is_pinned[it.col()]) t.emplace_back(it.row(), it.col(), it.value());
+      for (auto p : pinned_) t.emplace_back(p, p, 1.0);
+      SparseMatrix E(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+      E.setFromTriplets(t.begin(), t.end());
+      elliptic_ = factorise(E, "bidomain elliptic operator");
+    }
+  }
+}
+
+std::size_t TissueSolver::diffusion_unknowns() const {
+  return options_.formulation == Formulation::kMonodomain ? mesh_.node_count() : 2 * mesh_.node_count();
+}
+
+void TissueSolver::reaction(double t_ms, double dt_ms) {
+  const auto t0 = Clock::now();
+  for (Domain& d : domains_) {
+    for (std::size_t k = 0; k < d.nodes.size(); ++k) d.vm[k] = vm_[d.nodes[k]];
+    d.model->compute({0, d.nodes.size()}, dt_ms, d.vm.data(), d.iion.data());
+    for (std::size_t k = 0; k < d.nodes.size(); ++k) vm_[d.nodes[k]] -= dt_ms * d.iion[k];
+  }
+  const double t_mid = t_ms + 0.5 * dt_ms;
+  for (const Stimulus& s : stimuli_) {
+    const double a = s.amplitude_at(t_mid);
+    if (a == 0.0) continue;
+    for (auto i : s.nodes()) vm_[i] += dt_ms * a / options_.cm_uf_per_cm2;
+  }
+  reaction_s_ += seconds_since(t0);
+}
+
+void TissueSolver::zero_mean_ue() {
+  std::vector<double> sum, weight;
+  for (std::size_t i = 0; i < ue_.size(); ++i) {
+    const auto c = static_cast<std::size_t>(component_[i]);
+    if (c >= sum.size()) {
+      sum.resize(c + 1, 0.0);
+      weight.resize(c + 1, 0.0);
+    }
+    sum[c] += lumped_[static_cast<Eigen::Index>(i)] * ue_[i];
+    weight[c] += lumped_[static_cast<Eigen::Index>(i)];
+  }
+  for (std::size_t i = 0; i < ue_.size(); ++i) ue_[i] -= sum[component_[i]] / weight[component_[i]];
+}
+
+void TissueSolver::diffusion(double tau_ms, double theta) {
+  const auto t0 = Clock::now();
+  const auto n = static_cast<Eigen::Index>(mesh_.node_count());
+  const double c = options_.chi_per_cm * options_.cm_uf_per_cm2;
+  const Solver& S = *solve_[theta == 1.0 ? 0 : 1];
+  const Eigen::Map<Eigen::VectorXd> v(vm_.data(), n);
+  if (options_.formulation == Formulation::kMonodomain) {
+    Eigen::VectorXd rhs = mass_ * v * (c / tau_ms);
+    if (theta < 1.0) rhs -= (1.0 - theta) * (k_mono_ * v);
+    const Eigen::VectorXd x = S.solve(rhs);
+    Eigen::Map<Eigen::VectorXd>(vm_.data(), n) = x;
+  } else {
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+    rhs.head(n) = mass_ * v * (c / tau_ms);
+    if (theta < 1.0) {
+      // Explicit half: -K_i (v + u_e*) with u_e* solving the elliptic equation for this v.
+      Eigen::VectorXd b = -(k_i_ * v);
+      for (auto p : pinned_) b[p] = 0.0;
+      const Eigen::VectorXd ue_star = elliptic_->solve(b);
+      rhs.head(n) -= (1.0 - theta) * (k_i_ * (v + ue_star));
+    }
+    for (auto p : pinned_) rhs[n + p] = 0.0;
+    const Eigen::VectorXd x = S.solve(rhs);
+    Eigen::Map<Eigen::VectorXd>(vm_.data(), n) = x.head(n);
+    Eigen::Map<Eigen::VectorXd>(ue_.data(), n) = x.tail(n);
+    zero_mean_ue();
+  }
+  diffusion_s_ += seconds_since(t0);
+}
+
+void TissueSolver::step() {
+  const double dt = options_.dt_ms;
+  const std::vector<double> v_old = vm_;
+  if (options_.splitting == Splitting::kGodunov) {
+    reaction(t_ms_, dt);
+    diffusion(dt, 1.0);
+  } else {
+    diffusion(0.5 * dt, 0.5);
+    reaction(t_ms_, dt);
+    diffusion(0.5 * dt, 0.5);
+  }
+  for (std::size_t i = 0; i < vm_.size(); ++i) {
+    if (!(std::abs(vm_[i]) <= 1000.0)) {
+      std::ostringstream os;
+      os << "Vm = " << vm_[i] << " mV (outside [-1000, 1000] mV); reduce electro.time_step_ms";
+      throw InstabilityError("electro", "node " + std::to_string(i), (t_ms_ + dt) * 1e-3, os.str());
+    }
+  }
+  activation_.update(t_ms_, v_old, t_ms_ + dt, vm_);
+  tension_.advance(dt, vm_, rest_, peak_);
+  t_ms_ += dt;
+}
+
+}  // namespace systole::electro

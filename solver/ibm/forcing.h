@@ -1,0 +1,71 @@
+#pragma once
+// Direct forcing (MODEL.md §4, eq 3, 8): at each active marker F_b = (V_b − û(X_b))/Δt, spread
+// to the grid (eq 6–7) and added to the fluid's body force so that u* = û + Δt f carries the
+// body's velocity at the markers before the projection. Optional multi-direct forcing
+// (ours; Luo et al. 2007, Wang, Fan & Luo 2008 J. Comput. Phys. 227:6226): the interpolation and
+// correction repeated on u* = û + Δt f, F accumulating the corrections, to reduce the slip that
+// overlapping supports leave after one pass.
+//
+// The fluid is reached only through its body-force hook (scene/ wires
+// FluidSolver::set_body_force to apply()): this module does not depend on solver/fluid.
+#include <memory>
+#include <vector>
+
+#include "solver/ibm/transfer.h"
+
+namespace systole::ibm {
+
+struct ForcingParameters {
+  int iterations = 1;  // forcing passes per step, [1, 20]; 1 = the seed's single pass
+};
+void validate(const ForcingParameters& p);
+
+struct SlipStats {
+  double rms = 0, max = 0;  // over active markers, |V_b − u(X_b)|
+  std::size_t markers = 0;
+};
+
+struct ForcingReport {
+  SlipStats slip_before;        // of û (what the forcing corrects)
+  SlipStats slip_after;         // of û + Δt f after the last pass, before the projection
+                                // (measured only when iterations > 1; else markers = 0)
+  Vec3 total_force = Vec3::Zero();  // Σ_b F_b ΔV_b: the force on the fluid (the body feels −it)
+  int iterations = 0;
+};
+
+class DirectForcing {
+ public:
+  // The markers are referenced: call markers_moved() after they moved. Validates parameters.
+  DirectForcing(const grid::Slabs& slabs, const Markers& markers, ForcingParameters parameters);
+
+  // Adds the forcing of eq 3 to f (this rank's interior faces) for the step of size dt, given
+  // û with valid halos. Collective. Returns the report of this step. uniform_force: a uniform
+  // force density g the caller adds to f as well (a driving force); its velocity Δt g is added
+  // to the interpolated û (exact: Σφ = 1), so the markers see û + Δt g. Add g to f after apply().
+  const ForcingReport& apply(double dt, const ConstVelocityView& u_hat, VelocityView f,
+                             const Vec3& uniform_force = Vec3::Zero());
+  void markers_moved() { transfer_.rebuild(); }
+
+  // Slip of a velocity field (halos valid) at the active markers. Collective.
+  SlipStats slip(const ConstVelocityView& u) const;
+  // F_b of the last apply() (per marker, force density; 0 for inactive markers).
+  const std::vector<Vec3>& force_density() const { return force_; }
+  const ForcingReport& last_report() const { return report_; }
+  const Transfer& transfer() const { return transfer_; }
+  const ForcingParameters& parameters() const { return par_; }
+
+ private:
+  SlipStats slip_of(const std::vector<Vec3>& interpolated) const;
+  const grid::Slabs& slabs_;
+  const Markers& markers_;
+  ForcingParameters par_;
+  Transfer transfer_;
+  std::vector<Vec3> force_, increment_;
+  ForcingReport report_;
+  // Work velocity û + Δt f of the multi-direct passes (allocated when iterations > 1).
+  std::unique_ptr<grid::XFaceField> work_u_;
+  std::unique_ptr<grid::YFaceField> work_v_;
+  std::unique_ptr<grid::ZFaceField> work_w_;
+};
+
+}  // namespace systole::ibm

@@ -1,0 +1,103 @@
+#include "solver/ibm/loads.h"
+
+#include <mpi.h>
+
+namespace systole::ibm {
+
+using grid::Location;
+
+namespace {
+// Gradient of one field at X from the analytic MLS derivatives, into row `row` of the buffer.
+template <grid::Location L>
+void gradient_row(const grid::Field<L>& f, const MlsGradientStencil& s, double* out) {
+  for (int d = 0; d < 3; ++d) out[d] = apply_stencil(f, s, s.dphi[d]);
+}
+}  // namespace
+
+ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
+                  const std::vector<Vec3>& points) {
+  const grid::Grid& g = transfer.slabs().grid();
+  const std::size_t n = points.size();
+  // 10 values per point: p, then ∂u/∂x_j, ∂v/∂x_j, ∂w/∂x_j.
+  std::vector<double> local(10 * n, 0.0), global(10 * n, 0.0);
+  for (std::size_t q = 0; q < n; ++q) {
+    double* row = local.data() + 10 * q;
+    const MlsStencil sp = mls_stencil(g, Location::cell, points[q]);
+    if (transfer.owns_plane(sp.k_centre)) row[0] = apply_stencil(p, sp, sp.phi);
+    const MlsGradientStencil su = mls_gradient_stencil(g, Location::x_face, points[q]);
+    if (transfer.owns_plane(su.k_centre)) gradient_row(u.u, su, row + 1);
+    const MlsGradientStencil sv = mls_gradient_stencil(g, Location::y_face, points[q]);
+    if (transfer.owns_plane(sv.k_centre)) gradient_row(u.v, sv, row + 4);
+    const MlsGradientStencil sw = mls_gradient_stencil(g, Location::z_face, points[q]);
+    if (transfer.owns_plane(sw.k_centre)) gradient_row(u.w, sw, row + 7);
+  }
+  MPI_Allreduce(local.data(), global.data(), static_cast<int>(local.size()), MPI_DOUBLE, MPI_SUM,
+                transfer.slabs().comm());
+  ProbeValues out;
+  out.pressure.resize(n);
+  out.velocity_gradient.resize(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    const double* row = global.data() + 10 * q;
+    out.pressure[q] = row[0];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) out.velocity_gradient[q](i, j) = row[1 + 3 * i + j];
+  }
+  return out;
+}
+
+MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
+                          double reynolds, const std::vector<Vec3>& acceleration) {
+  const Markers& markers = transfer.markers();
+  const MarkerArrays& m = markers.markers();
+  const double h = markers.h();
+  const std::size_t n = m.size();
+  // Probes: "+" side for every active marker, "−" side for two-sided bodies.
+  std::vector<Vec3> points;
+  std::vector<std::ptrdiff_t> plus(n, -1), minus(n, -1);
+  for (std::size_t b = 0; b < n; ++b) {
+    if (!markers.active(b)) continue;
+    plus[b] = static_cast<std::ptrdiff_t>(points.size());
+    points.push_back(m.position[b] + h * m.normal[b]);
+    if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
+      minus[b] = static_cast<std::ptrdiff_t>(points.size());
+      points.push_back(m.position[b] - h * m.normal[b]);
+    }
+  }
+  const ProbeValues pv = probe(transfer, u, p, points);
+  MarkerLoads L;
+  L.force.assign(n, Vec3::Zero());
+  L.wall_pressure.assign(n, 0.0);
+  L.wall_pressure_minus.assign(n, 0.0);
+  L.wss.assign(n, 0.0);
+  L.wss_minus.assign(n, 0.0);
+  L.nodal_force.resize(markers.bodies().size());
+  for (std::size_t body = 0; body < markers.bodies().size(); ++body)
+    L.nodal_force[body].assign(markers.bodies()[body].tiled.node_count(), Vec3::Zero());
+  const double nu = 1.0 / reynolds;
+  auto wss_of = [](const Vec3& t, const Vec3& nn) { return (t - t.dot(nn) * nn).norm(); };
+  for (std::size_t b = 0; b < n; ++b) {
+    if (plus[b] < 0) continue;
+    const Vec3& nn = m.normal[b];
+    const double an = acceleration.empty() ? 0.0 : acceleration[b].dot(nn);
+    const Eigen::Matrix3d& Gp = pv.velocity_gradient[plus[b]];
+    const Vec3 tp = nu * (Gp + Gp.transpose()) * nn;   // τ⁺·n      (eq 11, 27)
+    const double pp = pv.pressure[plus[b]] + h * an;   // eq 14
+    L.wall_pressure[b] = pp;
+    L.wss[b] = wss_of(tp, nn);
+    Vec3 F = (-pp * nn + tp) * m.area[b];               // eq 11
+    if (minus[b] >= 0) {
+      const Eigen::Matrix3d& Gm = pv.velocity_gradient[minus[b]];
+      const Vec3 tm = nu * (Gm + Gm.transpose()) * nn;  // τ⁻·n⁺
+      const double pm = pv.pressure[minus[b]] - h * an; // eq 14 on the − side
+      L.wall_pressure_minus[b] = pm;
+      L.wss_minus[b] = wss_of(tm, nn);
+      F = (-(pp - pm) * nn + (tp - tm)) * m.area[b];    // eq 12
+    }
+    L.force[b] = F;
+    L.total_force += F;
+    for (int c = 0; c < 3; ++c) L.nodal_force[m.body[b]][m.node[b][c]] += F / 3.0;
+  }
+  return L;
+}
+
+}  // namespace systole::ibm

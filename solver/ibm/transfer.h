@@ -1,0 +1,113 @@
+#pragma once
+// Interpolation and spreading between the markers and the staggered grid (MODEL.md §4, eq 5–7),
+// distributed over the z-slabs of solver/grid.
+//
+// Who computes what (ours):
+// - Interpolation of component c at marker b is done by the rank whose slab holds the centre
+//   plane of b's support for c (the "owner"): its 3 planes lie in the slab plus its halo
+//   planes, so the owner needs only halos that are already valid (the fluid hands û with valid
+//   halos). The values are then summed over ranks (MPI_Allreduce): exactly one rank
+//   contributes a non-zero, so every rank gets the np = 1 value bitwise.
+// - Spreading: every rank adds the forcing of every marker whose support reaches its slab,
+//   writing only its own interior nodes (markers are replicated, markers.h). No reverse halo
+//   sum, no write conflicts, and each node accumulates its contributions in marker order on
+//   any number of ranks: bitwise equal to np = 1.
+// The stencils depend only on marker positions: rebuild() after the markers moved.
+#include <array>
+#include <vector>
+
+#include "solver/grid/grid.h"
+#include "solver/ibm/markers.h"
+#include "solver/ibm/mls.h"
+
+namespace systole::ibm {
+
+// The fluid's velocity as the immersed boundary sees it (no dependency on solver/fluid).
+struct ConstVelocityView {
+  const grid::XFaceField& u;
+  const grid::YFaceField& v;
+  const grid::ZFaceField& w;
+};
+struct VelocityView {
+  grid::XFaceField& u;
+  grid::YFaceField& v;
+  grid::ZFaceField& w;
+};
+
+class Transfer {
+ public:
+  // Builds the stencils of `markers`' active markers that this rank needs. Collective: no
+  // (purely local), but every rank must call rebuild() at the same points.
+  Transfer(const grid::Slabs& slabs, const Markers& markers);
+  void rebuild();
+
+  // u(X_b) for every marker (0 for inactive ones), the same on every rank. Collective.
+  // Halos of u must be valid.
+  std::vector<Vec3> interpolate(const ConstVelocityView& u) const;
+  // Adds f_k += ς_b φ_k(X_b) F_b on this rank's interior faces, ς_b = ΔV_b / ΔV_cell
+  // (eq 6–7; with Σφ_k = 1 the total grid force Σ f_k ΔV_cell equals Σ F_b ΔV_b). F is a
+  // force density per marker (inactive markers skipped). Not collective.
+  void spread(const std::vector<Vec3>& force_density, VelocityView f) const;
+
+  // Interpolates a scalar field at arbitrary points with its location's stencils (ownership as
+  // above). Collective.
+  template <grid::Location L>
+  std::vector<double> interpolate_points(const grid::Field<L>& field, const std::vector<Vec3>& points) const;
+
+  const Markers& markers() const { return markers_; }
+  const grid::Slabs& slabs() const { return slabs_; }
+  // Whether this rank owns the centre plane k (global) of a support.
+  bool owns_plane(int k) const;
+
+ private:
+  struct Entry {
+    std::size_t marker;
+    bool owner;       // this rank interpolates it
+    bool spreads;     // its support reaches this rank's interior planes
+    MlsStencil stencil;
+  };
+  template <grid::Location L>
+  void interpolate_component(const grid::Field<L>& f, const std::vector<Entry>& entries, int c,
+                             std::vector<double>& out) const;
+  template <grid::Location L>
+  void spread_component(const std::vector<Entry>& entries, int c, const std::vector<Vec3>& F,
+                        grid::Field<L>& f) const;
+  const grid::Slabs& slabs_;
+  const Markers& markers_;
+  std::array<std::vector<Entry>, 3> entries_;  // per component u, v, w
+};
+
+// Value of a field from an MLS stencil on this rank (planes k0..k0+2 must be local or halo).
+template <grid::Location L>
+double apply_stencil(const grid::Field<L>& f, const MlsStencil& s, const std::array<double, 27>& weights) {
+  const int nx = f.nx(), ny = f.ny(), kb = f.k_begin();
+  double sum = 0;
+  for (int c = 0; c < 3; ++c) {
+    const int k = s.k0 + c - kb;
+    for (int b = 0; b < 3; ++b) {
+      int j = s.j0 + b;
+      if (j >= ny) j -= ny;
+      for (int a = 0; a < 3; ++a) {
+        const double w = weights[a + 3 * b + 9 * c];
+        if (w == 0) continue;
+        int i = s.i0 + a;
+        if (i >= nx) i -= nx;
+        sum += w * f(i, j, k);
+      }
+    }
+  }
+  return sum;
+}
+
+template <grid::Location L>
+std::vector<double> Transfer::interpolate_points(const grid::Field<L>& field, const std::vector<Vec3>& points) const {
+  std::vector<double> local(points.size(), 0.0), global(points.size(), 0.0);
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const MlsStencil s = mls_stencil(slabs_.grid(), L, points[p]);
+    if (owns_plane(s.k_centre)) local[p] = apply_stencil(field, s, s.phi);
+  }
+  MPI_Allreduce(local.data(), global.data(), static_cast<int>(local.size()), MPI_DOUBLE, MPI_SUM, slabs_.comm());
+  return global;
+}
+
+}  // namespace systole::ibm

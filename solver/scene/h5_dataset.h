@@ -1,0 +1,22 @@
+#pragma once
+// One uncompressed HDF5 dataset, 1-D (cols = 1) or rows × cols, written in one call: the nodal
+// fields the scenes' XDMF files point at. Throws std::runtime_error naming `owner` and the dataset.
+#include <hdf5.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace systole::scene {
+
+inline void write_h5_dataset(hid_t file, const std::string& name, hid_t type, const void* data, hsize_t rows,
+                             hsize_t cols, const char* owner) {
+  const hsize_t dims[2] = {rows, cols};
+  const hid_t space = H5Screate_simple(cols > 1 ? 2 : 1, dims, nullptr);
+  const hid_t set = H5Dcreate2(file, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  const bool ok = set >= 0 && H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0;
+  if (set >= 0) H5Dclose(set);
+  H5Sclose(space);
+  if (!ok) throw std::runtime_error(std::string(owner) + ": cannot write HDF5 dataset " + name);
+}
+
+}  // namespace systole::scene

@@ -1,0 +1,296 @@
+#include "solver/scene/mechanics_scene.h"
+#include "solver/scene/h5_dataset.h"
+
+#include <hdf5.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "solver/core/errors.h"
+#include "solver/core/units.h"
+#include "solver/geometry/left_heart.h"
+#include "solver/geometry/topology.h"
+#include "solver/structure/shapes.h"
+#include "solver/structure/shell.h"
+
+namespace systole::scene {
+namespace {
+
+using structure::ShellModel;
+using structure::Vec3;
+
+struct Body {
+  std::unique_ptr<ShellModel> model;
+  double volume0_mm3 = 0;
+};
+
+// The bodies of the scenario's structure.body, with their options.
+std::vector<Body> build_bodies(const config::Scenario& s) {
+  const config::Structure& st = s.structure;
+  structure::ShellOptions opt;
+  opt.law = st.law;
+  opt.bending = st.bending;
+  opt.damping_per_ms = st.damping_per_ms;
+  opt.time_step_safety = st.time_step_safety;
+  opt.strain_limit = st.strain_limit;
+  const structure::ShellMaterials mat = structure::materials_from_config(s.tissue);
+  std::vector<Body> bodies;
+  if (st.body == "sphere") {
+    auto mesh = structure::icosphere(st.sphere_radius_mm, st.sphere_refinement, st.shell_thickness_mm,
+                                     geometry::Tissue::kLvMyocardium, true);
+    bodies.push_back({std::make_unique<ShellModel>(mesh, mat, opt)});
+  } else if (st.body == "sheet") {
+    const int nx = std::max(3, static_cast<int>(std::lround(st.sheet_size_mm / st.sheet_edge_mm)) + 1);
+    const int ny = std::max(3, static_cast<int>(std::lround(st.sheet_size_mm / (st.sheet_edge_mm * std::sqrt(3.0) / 2))) + 1);
+    auto mesh = structure::flat_sheet(nx, ny, st.sheet_edge_mm, st.shell_thickness_mm,
+                                      geometry::Tissue::kMitralLeaflet, Vec3::UnitX());
+    // Clamped on its boundary (ours).
+    const geometry::EdgeTopology topo(mesh);
+    for (const auto& loop : geometry::boundary_loops(mesh, topo))
+      for (auto i : loop) mesh.region[i] |= geometry::kAnchor;
+    bodies.push_back({std::make_unique<ShellModel>(mesh, mat, opt)});
+  } else {  // left_heart (LV + LA) or lv
+    const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
+    opt.cavity_plane_z_mm = heart.plane.z_mm;
+    bodies.push_back({std::make_unique<ShellModel>(heart.body(geometry::kLvBody), mat, opt)});
+    if (st.body == "left_heart") bodies.push_back({std::make_unique<ShellModel>(heart.body(geometry::kLaBody), mat, opt)});
+  }
+  for (auto& b : bodies) b.volume0_mm3 = b.model->cavity_volume_mm3();
+  return bodies;
+}
+
+// Per-node largest |edge strain| (a nodal field for ParaView).
+std::vector<double> node_strain(const ShellModel& m) {
+  std::vector<double> s(m.node_count(), 0.0);
+  const auto eps = m.edge_strains();
+  for (std::size_t k = 0; k < eps.size(); ++k) {
+    const auto& sp = m.springs()[k];
+    s[sp.i] = std::max(s[sp.i], std::abs(eps[k]));
+    s[sp.j] = std::max(s[sp.j], std::abs(eps[k]));
+  }
+  return s;
+}
+
+// --- positions over time: HDF5 + XDMF ----------------------------------------------------------
+void h5_write(hid_t file, const std::string& name, hid_t type, const void* data, hsize_t rows, hsize_t cols) {
+  write_h5_dataset(file, name, type, data, rows, cols, "mechanics");
+}
+
+class PositionWriter {
+ public:
+  PositionWriter(const std::filesystem::path& dir, const std::vector<Body>& bodies) : dir_(dir) {
+    std::filesystem::create_directories(dir);
+    file_ = H5Fcreate((dir / "structure.h5").string().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (file_ < 0) throw std::runtime_error("mechanics: cannot create " + (dir / "structure.h5").string());
+    H5Gclose(H5Gcreate2(file_, "mesh", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    H5Gclose(H5Gcreate2(file_, "steps", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    for (const auto& b : bodies) {
+      const auto& m = b.model->stress_free_mesh();
+      std::vector<std::int32_t> tri;
+      for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
+      h5_write(file_, "mesh/" + b.model->name() + "_triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3);
+    }
+  }
+  ~PositionWriter() {
+    if (file_ >= 0) H5Fclose(file_);
+  }
+  PositionWriter(const PositionWriter&) = delete;
+  PositionWriter& operator=(const PositionWriter&) = delete;
+
+  void write(const std::vector<Body>& bodies, double time_ms) {
+    const std::string step = "steps/" + std::to_string(times_.size());
+    H5Gclose(H5Gcreate2(file_, step.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    for (const auto& b : bodies) {
+      std::vector<double> xyz;
+      for (const auto& p : b.model->positions_mm()) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+      const auto strain = node_strain(*b.model);
+      h5_write(file_, step + "/" + b.model->name() + "_positions_mm", H5T_NATIVE_DOUBLE, xyz.data(),
+               b.model->node_count(), 3);
+      h5_write(file_, step + "/" + b.model->name() + "_strain", H5T_NATIVE_DOUBLE, strain.data(), b.model->node_count(), 1);
+    }
+    times_.push_back(time_ms);
+  }
+
+  // The XDMF index (a temporal collection of per-body grids), written once at the end.
+  void finish(const std::vector<Body>& bodies) {
+    std::ofstream x(dir_ / "structure.xmf");
+    x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+      << "  <Grid Name=\"structure\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (std::size_t k = 0; k < times_.size(); ++k) {
+      x << "   <Grid Name=\"step" << k << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
+        << "    <Time Value=\"" << times_[k] << "\"/>\n";
+      for (const auto& b : bodies) {
+        const std::string n = b.model->name();
+        const auto nt = b.model->stress_free_mesh().triangle_count(), nn = b.model->node_count();
+        x << "    <Grid Name=\"" << n << "\" GridType=\"Uniform\">\n"
+          << "     <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << nt << "\">\n"
+          << "      <DataItem Dimensions=\"" << nt << " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">structure.h5:/mesh/"
+          << n << "_triangles</DataItem>\n     </Topology>\n"
+          << "     <Geometry GeometryType=\"XYZ\">\n      <DataItem Dimensions=\"" << nn
+          << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">structure.h5:/steps/" << k << "/" << n
+          << "_positions_mm</DataItem>\n     </Geometry>\n"
+          << "     <Attribute Name=\"strain\" AttributeType=\"Scalar\" Center=\"Node\">\n      <DataItem Dimensions=\"" << nn
+          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">structure.h5:/steps/" << k << "/" << n
+          << "_strain</DataItem>\n     </Attribute>\n    </Grid>\n";
+      }
+      x << "   </Grid>\n";
+    }
+    x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  }
+
+ private:
+  std::filesystem::path dir_;
+  hid_t file_ = -1;
+  std::vector<double> times_;
+};
+
+bool is_rank_zero() {
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) return true;
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank == 0;
+}
+
+double mean_abs_strain(const ShellModel& m) {
+  const auto eps = m.edge_strains();
+  double s = 0;
+  for (double e : eps) s += std::abs(e);
+  return eps.empty() ? 0 : s / static_cast<double>(eps.size());
+}
+
+}  // namespace
+
+const std::vector<std::string>& mechanics_metric_names() {
+  static const std::vector<std::string> names{
+      "volume_initial_ml", "volume_final_ml", "volume_change_percent", "max_strain", "mean_strain",
+      "kinetic_energy_final_uj", "elastic_energy_final_uj", "bending_energy_final_uj", "stable_step_initial_ms",
+      "stable_step_final_ms", "substeps", "nodes", "node_substeps_per_s", "end_time_ms", "positions_written",
+      "wall_time_s"};
+  return names;
+}
+
+RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
+  const config::Structure& st = scenario.structure;
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Body> bodies = build_bodies(scenario);
+  const double p_full_kpa = st.cavity_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+  auto ramp = [&](double t_ms) { return st.pressure_ramp_ms > 0 ? std::min(1.0, t_ms / st.pressure_ramp_ms) : 1.0; };
+  auto set_loads = [&](double t_ms) {
+    for (auto& b : bodies) {
+      b.model->set_cavity_pressure(p_full_kpa * ramp(t_ms));
+      if (st.active_tension_kpa > 0)
+        b.model->set_active_tension(std::vector<double>(b.model->node_count(), st.active_tension_kpa * ramp(t_ms)));
+    }
+  };
+
+  const std::filesystem::path dir = control.output_directory();
+  const bool write = st.write_positions && !dir.empty() && is_rank_zero();
+  std::unique_ptr<PositionWriter> writer;
+  if (write) writer = std::make_unique<PositionWriter>(dir, bodies);
+
+  RunResult result;
+  std::vector<Series> series{{"time_s", "s", {}}, {"pressure_mmhg", "mmHg", {}}};
+  for (const auto& b : bodies) series.push_back({b.model->name() + "_volume_ml", "ml", {}});
+  const std::size_t first_extra = series.size();
+  series.push_back({"max_strain", "", {}});
+  series.push_back({"kinetic_energy_uj", "uJ", {}});
+  series.push_back({"elastic_energy_uj", "uJ", {}});
+  series.push_back({"bending_energy_uj", "uJ", {}});
+  auto sample = [&](double t_ms) {
+    series[0].values.push_back(t_ms * 1e-3);
+    series[1].values.push_back(st.cavity_pressure_mmhg * ramp(t_ms));
+    double strain = 0, ke = 0, el = 0, be = 0;
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const ShellModel& m = *bodies[k].model;
+      series[2 + k].values.push_back(m.cavity_volume_mm3() * 1e-3);
+      strain = std::max(strain, m.max_abs_strain());
+      const auto e = m.energies();
+      ke += e.kinetic_uj;
+      el += e.elastic_uj;
+      be += e.bending_uj;
+    }
+    series[first_extra].values.push_back(strain);
+    series[first_extra + 1].values.push_back(ke);
+    series[first_extra + 2].values.push_back(el);
+    series[first_extra + 3].values.push_back(be);
+    if (writer) writer->write(bodies, t_ms);
+  };
+
+  double dt0 = 1e300;
+  for (const auto& b : bodies) dt0 = std::min(dt0, b.model->stable_step_ms());
+  sample(0);
+  const int steps = std::max(1, static_cast<int>(std::ceil(st.end_time_ms / st.output_interval_ms - 1e-9)));
+  long substeps = 0, node_substeps = 0;
+  double t = 0;
+  const auto loop_start = std::chrono::steady_clock::now();
+  for (int k = 1; k <= steps; ++k) {
+    if (control.cancel_requested()) throw Cancelled();
+    const double t_next = std::min(st.end_time_ms, k * st.output_interval_ms);
+    // Loads held over the outer step at their value at its middle (ours).
+    set_loads(0.5 * (t + t_next));
+    for (auto& b : bodies) {
+      const auto stats = b.model->advance(t_next - t);
+      substeps += stats.substeps;
+      node_substeps += static_cast<long>(stats.substeps) * static_cast<long>(b.model->node_count());
+    }
+    t = t_next;
+    sample(t);
+    ProgressReport report;
+    report.simulated_time_s = t * 1e-3;
+    report.beat = 1;
+    report.beats_total = 1;
+    report.fraction = t / st.end_time_ms;
+    report.message = "mechanics t = " + std::to_string(t) + " ms";
+    control.on_progress(report);
+  }
+  const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  if (writer) {
+    writer->finish(bodies);
+    result.notes.push_back("node positions and strains at every outer step in structure.h5 (+ structure.xmf for ParaView)");
+  } else if (st.write_positions && dir.empty()) {
+    result.notes.push_back("positions were requested but the caller gave no output directory: none written");
+  }
+
+  const ShellModel& main = *bodies.front().model;
+  const auto e = main.energies();
+  double dt_final = 1e300;
+  for (const auto& b : bodies) dt_final = std::min(dt_final, b.model->stable_step_ms());
+  auto& m = result.metrics;
+  m["volume_initial_ml"] = bodies.front().volume0_mm3 * 1e-3;
+  m["volume_final_ml"] = main.cavity_volume_mm3() * 1e-3;
+  m["volume_change_percent"] = 100 * (main.cavity_volume_mm3() / bodies.front().volume0_mm3 - 1);
+  m["max_strain"] = main.max_abs_strain();
+  m["mean_strain"] = mean_abs_strain(main);
+  m["kinetic_energy_final_uj"] = e.kinetic_uj;
+  m["elastic_energy_final_uj"] = e.elastic_uj;
+  m["bending_energy_final_uj"] = e.bending_uj;
+  m["stable_step_initial_ms"] = dt0;
+  m["stable_step_final_ms"] = dt_final;
+  m["substeps"] = static_cast<double>(substeps);
+  double nodes = 0;
+  for (const auto& b : bodies) nodes += static_cast<double>(b.model->node_count());
+  m["nodes"] = nodes;
+  m["node_substeps_per_s"] = loop_s > 0 ? static_cast<double>(node_substeps) / loop_s : 0;
+  m["end_time_ms"] = t;
+  m["positions_written"] = writer ? 1 : 0;
+  if (st.body == "left_heart" || st.body == "lv") {
+    for (const auto& b : bodies) {
+      m[b.model->name() + "_volume_initial_ml"] = b.volume0_mm3 * 1e-3;
+      m[b.model->name() + "_volume_final_ml"] = b.model->cavity_volume_mm3() * 1e-3;
+      m[b.model->name() + "_max_strain"] = b.model->max_abs_strain();
+    }
+  }
+  if (scenario.outputs.time_series) result.series = std::move(series);
+  m["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace systole::scene

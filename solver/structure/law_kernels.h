@@ -1,0 +1,46 @@
+#pragma once
+// Inline stress laws shared by the registry (spring_law.cc) and the force loop (shell.cc),
+// so the hot loop is specialised per law. See spring_law.h for the formulas and units.
+#include <cmath>
+
+namespace systole::structure::kernels {
+
+// Each law: stress(eps) and tangent(eps), and both at once (one exp for the force loop).
+struct Fung {
+  static void stress_tangent(double eps, double c, double a, double& tau, double& dtau) {
+    const double q = a * eps * eps;
+    const double ca_e = c * a * std::exp(q);
+    tau = ca_e * eps;
+    dtau = ca_e * (1 + 2 * q);
+  }
+  static double stress(double eps, double c, double a) { return c * a * std::exp(a * eps * eps) * eps; }
+  static double tangent(double eps, double c, double a) {
+    const double q = a * eps * eps;
+    return c * a * std::exp(q) * (1 + 2 * q);
+  }
+};
+struct Linear {
+  static void stress_tangent(double eps, double c, double a, double& tau, double& dtau) {
+    tau = c * a * eps;
+    dtau = c * a;
+  }
+  static double stress(double eps, double c, double a) { return c * a * eps; }
+  static double tangent(double, double c, double a) { return c * a; }
+};
+// lambda = l / l0 = 1 / (1 - eps); tau = (c a / 3)(lambda - lambda^-2).
+struct NeoHookean {
+  static void stress_tangent(double eps, double c, double a, double& tau, double& dtau) {
+    tau = stress(eps, c, a);
+    dtau = tangent(eps, c, a);
+  }
+  static double stress(double eps, double c, double a) {
+    const double lam = 1 / (1 - eps);
+    return c * a / 3 * (lam - 1 / (lam * lam));
+  }
+  static double tangent(double eps, double c, double a) {
+    const double lam = 1 / (1 - eps);
+    return c * a / 3 * (1 + 2 / (lam * lam * lam)) * lam * lam;  // d lambda / d eps = lambda^2
+  }
+};
+
+}  // namespace systole::structure::kernels
