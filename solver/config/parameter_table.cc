@@ -181,6 +181,19 @@ std::vector<Param> build_table() {
                                     "periods of the heart rate)."));
   t.push_back(SYSTOLE_REAL(electro.activation_threshold_mv, "mV", -40, -100, 50,
                            "Activation time: upward crossing of this potential (ours)."));
+  t.push_back(SYSTOLE_BOOL(electro.purkinje, true,
+                           "Scene 'electro', left heart: Purkinje surrogate (ours) - besides the His bundle, "
+                           "electro.purkinje_sites early-activation stimuli spread over the LV, each delayed by "
+                           "its straight-line distance from the His site / purkinje_conduction_velocity_m_per_s. "
+                           "false: the His bundle alone."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.purkinje_conduction_velocity_m_per_s, "m/s", 2, 0, 100,
+                                    "Purkinje surrogate: conduction velocity of the Purkinje network (1-4 m/s)."));
+  t.push_back(SYSTOLE_INT(electro.purkinje_sites, "", 16, 1, 1000,
+                          "Purkinje surrogate: number of LV sites (farthest-point sampling from the His site)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electro.la_conductivity_scale, "", 1, 0, 1000,
+                                    "Left heart: factor on sigma_i and sigma_e in the LA (ours; the FHN parameter "
+                                    "set conducts at ~0.17 m/s with the seed's conductivities, CV ~ sqrt(factor); a factor >= 4 "
+                                    "stops the default Bachmann stimulus from exciting, docs/electro.md)."));
   // --- fluid (eq 1-10, MODEL.md §3) ------------------------------------------------------
   t.push_back(SYSTOLE_REAL(fluid.kinematic_viscosity_m2_per_s, "m^2/s", 4.8e-6, 1e-8, 0.1,
                            "Newtonian kinematic viscosity; Re = U_m d_m / nu = 0.0144 m^2/s / nu (seed blood "

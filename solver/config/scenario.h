@@ -60,6 +60,10 @@ struct Electro {
   double fibre_angle_deg;
   double end_time_ms;
   double activation_threshold_mv;
+  bool purkinje;                                // Purkinje surrogate on the LV (ours)
+  double purkinje_conduction_velocity_m_per_s;  // delay of each site = distance / this
+  int purkinje_sites;                           // early-activation sites spread over the LV
+  double la_conductivity_scale;                 // factor on sigma_i, sigma_e in the LA (ours)
 };
 
 struct Fluid {

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <sstream>
+#include <string>
 
 #include "solver/core/errors.h"
 
@@ -80,13 +81,17 @@ Eigen::VectorXd lumped_mass(const ElectroMesh& mesh) {
   return M * Eigen::VectorXd::Ones(M.cols());
 }
 
-SparseMatrix assemble_stiffness(const ElectroMesh& mesh, const Conductivity& sigma) {
+SparseMatrix assemble_stiffness(const ElectroMesh& mesh, const Conductivity& sigma,
+                                const std::vector<double>& cell_scale) {
   if (!(sigma.fibre_ms_per_cm > 0) || !(sigma.cross_ms_per_cm > 0)) {
     std::ostringstream os;
     os << "conductivity (fibre " << sigma.fibre_ms_per_cm << ", cross " << sigma.cross_ms_per_cm
        << ") mS/cm: both must be > 0";
     throw InputError(os.str());
   }
+  if (!cell_scale.empty() && cell_scale.size() != mesh.cell_count())
+    throw InputError("conductivity cell_scale: " + std::to_string(cell_scale.size()) + " factors for " +
+                     std::to_string(mesh.cell_count()) + " cells");
   const int k = mesh.nodes_per_cell();
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(mesh.cell_count() * k * k);
@@ -95,7 +100,8 @@ SparseMatrix assemble_stiffness(const ElectroMesh& mesh, const Conductivity& sig
     const Vec3& f = mesh.fibre[c];
     const Eigen::Matrix3d S = sigma.cross_ms_per_cm * Eigen::Matrix3d::Identity() +
                               (sigma.fibre_ms_per_cm - sigma.cross_ms_per_cm) * f * f.transpose();
-    const Eigen::Matrix<double, 4, 4> Ke = g.measure * g.grad * S * g.grad.transpose();
+    const double scale = cell_scale.empty() ? 1.0 : cell_scale[c];
+    const Eigen::Matrix<double, 4, 4> Ke = (scale * g.measure) * g.grad * S * g.grad.transpose();
     for (int a = 0; a < k; ++a)
       for (int b = 0; b < k; ++b) t.emplace_back(mesh.cell[c][a], mesh.cell[c][b], Ke(a, b));
   }

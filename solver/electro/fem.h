@@ -32,6 +32,9 @@ std::vector<double> cell_measures_cm(const ElectroMesh& mesh);
 SparseMatrix assemble_mass(const ElectroMesh& mesh);
 // Row sums of the consistent mass (the lumped mass; a node's share of the area / volume).
 Eigen::VectorXd lumped_mass(const ElectroMesh& mesh);
-SparseMatrix assemble_stiffness(const ElectroMesh& mesh, const Conductivity& sigma);
+// cell_scale (optional, one factor > 0 per cell): sigma of cell c is multiplied by cell_scale[c]
+// (per-domain conductivity scaling, e.g. the atrial scale of the scene; ours).
+SparseMatrix assemble_stiffness(const ElectroMesh& mesh, const Conductivity& sigma,
+                                const std::vector<double>& cell_scale = {});
 
 }  // namespace systole::electro

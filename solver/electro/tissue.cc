@@ -133,13 +133,23 @@ TissueSolver::TissueSolver(ElectroMesh mesh, TissueOptions options)
   const double dts[2] = {options_.dt_ms, 0.5 * options_.dt_ms};
   const double thetas[2] = {1.0, 0.5};
   const int needed = options_.splitting == Splitting::kGodunov ? 0 : 1;
+  std::vector<double> cell_scale;  // per-domain conductivity factor, per cell (ours)
+  if (!options_.domain_conductivity_scale.empty()) {
+    cell_scale.resize(mesh_.cell_count());
+    for (std::size_t cc = 0; cc < mesh_.cell_count(); ++cc) {
+      const auto d = static_cast<std::size_t>(mesh_.node_domain[static_cast<std::size_t>(mesh_.cell[cc][0])]);
+      const double f = d < options_.domain_conductivity_scale.size() ? options_.domain_conductivity_scale[d] : 1.0;
+      if (!(f > 0)) throw InputError("domain_conductivity_scale[" + std::to_string(d) + "] = " + std::to_string(f) + ": must be > 0");
+      cell_scale[cc] = f;
+    }
+  }
   if (options_.formulation == Formulation::kMonodomain) {
-    k_mono_ = assemble_stiffness(mesh_, monodomain_conductivity(options_.sigma_i, options_.sigma_e));
+    k_mono_ = assemble_stiffness(mesh_, monodomain_conductivity(options_.sigma_i, options_.sigma_e), cell_scale);
     const SparseMatrix A = SparseMatrix(mass_ * (c / dts[needed])) + SparseMatrix(k_mono_ * thetas[needed]);
     solve_[needed] = factorise(A, "monodomain diffusion");
   } else {
-    k_i_ = assemble_stiffness(mesh_, options_.sigma_i);
-    k_sum_ = SparseMatrix(k_i_ + assemble_stiffness(mesh_, options_.sigma_e));
+    k_i_ = assemble_stiffness(mesh_, options_.sigma_i, cell_scale);
+    k_sum_ = SparseMatrix(k_i_ + assemble_stiffness(mesh_, options_.sigma_e, cell_scale));
     component_ = mesh_.components();
     std::vector<char> seen;
     for (std::size_t i = 0; i < n; ++i) {

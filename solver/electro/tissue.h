@@ -52,6 +52,9 @@ struct TissueOptions {
   std::vector<StimulusSpec> stimuli;
   double activation_threshold_mv;  // e.g. -40 mV
   double tension_k_kpa;            // Nash–Panfilov amplitude k_tau (eq 23)
+  // Optional factor (> 0) on sigma_i and sigma_e per mesh domain (empty: 1 everywhere); a cell
+  // takes the factor of its first node's domain (ours; e.g. the atrial conductivity scale).
+  std::vector<double> domain_conductivity_scale = {};
 };
 
 // The monodomain conductivity of a (sigma_i, sigma_e) pair (fibre-wise harmonic mean).

@@ -70,7 +70,8 @@ struct IbmCaseSpec {
 // oscillating_sphere: added_mass_coefficient, added_mass_coefficient_stokes (the reference),
 //   added_mass_relative_error, stokes_layer_thickness.
 // womersley_pipe: error_linf_relative, reference_peak_velocity, periods.
-// series: time_s (time units × time_scale_s), force_x, force_y, force_z (on the body), slip_rms.
+// series: time_s (time units × time_scale_s), force_x, force_y, force_z (on the body; each the
+// impulse mean ∫F dt/∫dt over the interval since the previous sample, also for the drag), slip_rms.
 RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale_s = 1.0,
                        const std::function<void(const ProgressReport&)>& progress = {},
                        const std::function<bool()>& cancel = {});

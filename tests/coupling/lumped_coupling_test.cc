@@ -109,13 +109,13 @@ CoupledRun coupled_run(const config::Scenario& s, double wall_resistance, double
     r.stats = scheduler.stats();
   };
   if (volume_driven) {
-    LumpedModule circulation(s, lumped::ExternalVolumes{.lv_ml = v_start});
+    LumpedModule circulation(s, lumped::ExternalVolumes{.lv_ml = v_start, .la_ml = std::nullopt});
     piston.pressure_mmhg = circulation.readout().lv_pressure_mmhg;
     std::vector<Stage> stages{
         {&piston,
          {{.name = "lv_volume",
            .read = [&](std::vector<double>& d) { d.assign(1, piston.volume_ml()); },
-           .write = [&](const std::vector<double>& d) { circulation.set_target_volumes(piston.time_ms(), {.lv_ml = d[0]}); },
+           .write = [&](const std::vector<double>& d) { circulation.set_target_volumes(piston.time_ms(), {.lv_ml = d[0], .la_ml = std::nullopt}); },
            .relaxed = false}}},
         {&circulation,
          {{.name = "lv_pressure",
@@ -125,7 +125,7 @@ CoupledRun coupled_run(const config::Scenario& s, double wall_resistance, double
     record(scheduler, circulation);
     return r;
   }
-  LumpedModule circulation(s, lumped::ExternalVolumes{.lv_ml = v_start}, lumped::PressureDriven{.lv = true});
+  LumpedModule circulation(s, lumped::ExternalVolumes{.lv_ml = v_start, .la_ml = std::nullopt}, lumped::PressureDriven{.lv = true, .la = false});
   CavityPressureConstraint constraint(
       "lv_cavity",
       {.mesh_volume_ml = [&] { return piston.volume_ml(); },

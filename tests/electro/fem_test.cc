@@ -101,6 +101,21 @@ TEST(Fem, NonPositiveConductivityIsAnInputError) {
   EXPECT_THROW((void)assemble_stiffness(m, {1.0, -1.0}), InputError);
 }
 
+// Per-cell conductivity factor (the scene's per-domain scale, ours): a cell's element matrix is
+// multiplied by its factor; a factor list of the wrong length is an InputError.
+TEST(Fem, CellScaleMultipliesTheElementMatrices) {
+  const ElectroMesh m = make_sheet(4.0, 3.0, 1.0, 20.0);
+  const SparseMatrix K = assemble_stiffness(m, {3.0, 0.5});
+  const SparseMatrix K3 = assemble_stiffness(m, {3.0, 0.5}, std::vector<double>(m.cell_count(), 3.0));
+  EXPECT_LT((SparseMatrix(K3 - 3.0 * K)).norm(), 1e-12 * K.norm());
+  std::vector<double> half(m.cell_count(), 1.0);
+  for (std::size_t c = 0; c < half.size() / 2; ++c) half[c] = 2.0;
+  const SparseMatrix Kh = assemble_stiffness(m, {3.0, 0.5}, half);
+  EXPECT_GT((SparseMatrix(Kh - K)).norm(), 1e-3 * K.norm());
+  EXPECT_LT((Kh * Eigen::VectorXd::Ones(Kh.cols())).norm(), 1e-12 * Kh.norm());  // constants still in the null space
+  EXPECT_THROW((void)assemble_stiffness(m, {3.0, 0.5}, std::vector<double>(3, 1.0)), InputError);
+}
+
 TEST(Fem, GeneratedMeshesAreConsistent) {
   const ElectroMesh s = make_sheet(10.0, 6.0, 1.0, 0.0);
   EXPECT_EQ(s.node_count(), 11u * 7u);
