@@ -139,6 +139,7 @@ ElectroMesh from_surfaces(const std::vector<const geometry::TriMesh*>& bodies) {
           m.position_mm.push_back(body.position_mm[old]);
           m.node_region.push_back(body.region[old]);
           m.node_domain.push_back(static_cast<std::uint8_t>(b));
+          m.source_node.push_back({static_cast<std::int32_t>(b), old});
         }
         c[k] = new_index[old];
       }

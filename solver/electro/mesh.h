@@ -34,6 +34,9 @@ struct ElectroMesh {
   std::vector<std::uint32_t> node_region;
   std::vector<std::uint8_t> node_domain;
   std::vector<std::string> domain_names;  // e.g. {"lv", "la"}
+  // from_surfaces only (empty otherwise): {body index, node index in that body} of every node,
+  // so fields can be mapped back to the surface meshes (e.g. tension to the structure).
+  std::vector<std::array<std::int32_t, 2>> source_node;
 
   std::size_t node_count() const { return position_mm.size(); }
   std::size_t cell_count() const { return cell.size(); }

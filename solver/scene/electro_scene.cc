@@ -34,10 +34,7 @@ using electro::StimulusRegion;
 using electro::StimulusSpec;
 using electro::Vec3;
 
-struct Probe {
-  std::string name;
-  std::size_t node;
-};
+using Probe = EpProbe;
 
 std::size_t nearest_node(const ElectroMesh& m, const Vec3& p, int domain = -1) {
   std::size_t best = 0;
@@ -176,7 +173,60 @@ void add_purkinje_sites(const ElectroMesh& m, std::size_t his_node, const config
   }
 }
 
+// The tissue options every EP scene takes from the scenario (conductivities, chi, C_m, time
+// step, splitting, threshold, k_tau), with the given cell models and stimuli.
+electro::TissueOptions tissue_options(const config::Scenario& scenario, std::vector<std::string> models,
+                                      std::vector<StimulusSpec> stimuli) {
+  const config::Electro& e = scenario.electro;
+  electro::TissueOptions o;
+  o.formulation = electro::formulation_from_name(e.model);
+  o.splitting = electro::splitting_from_name(e.splitting);
+  o.dt_ms = e.time_step_ms;
+  o.chi_per_cm = e.surface_to_volume_per_cm;
+  o.cm_uf_per_cm2 = e.membrane_capacitance_uf_per_cm2;
+  o.sigma_i = {e.sigma_i_fibre_ms_per_cm, e.sigma_i_cross_ms_per_cm};
+  o.sigma_e = {e.sigma_e_fibre_ms_per_cm, e.sigma_e_cross_ms_per_cm};
+  o.domain_cell_models = std::move(models);
+  o.stimuli = std::move(stimuli);
+  o.activation_threshold_mv = e.activation_threshold_mv;
+  o.tension_k_kpa = scenario.tissue.active_tension_k_kpa;
+  return o;
+}
+
 }  // namespace
+
+LeftHeartEp left_heart_ep(const config::Scenario& scenario, const geometry::TriMesh& lv,
+                          const geometry::TriMesh& la) {
+  const config::Electro& e = scenario.electro;
+  const double period_ms = scenario.period_ms();
+  std::vector<StimulusSpec> stimuli;
+  auto stim = [&](std::string name, StimulusRegion region, double start_ms) {
+    stimuli.push_back({std::move(name), std::move(region), e.stimulus.amplitude_ua_per_cm2, e.stimulus.duration_ms,
+                       start_ms, period_ms});
+  };
+  LeftHeartEp ep;
+  ep.mesh = electro::from_surfaces({&lv, &la});
+  const ElectroMesh& mesh = ep.mesh;
+  StimulusRegion bb;
+  bb.kind = StimulusRegion::Kind::kTagged;
+  bb.region_bits = geometry::kBachmannBundle;
+  bb.domain = 1;
+  stim("bachmann_bundle", bb, 0.0);
+  StimulusRegion his = bb;
+  his.region_bits = geometry::kHisBundle;
+  his.domain = 0;
+  stim("his_bundle", his, scenario.av_delay_ms);
+  const std::size_t his_node = first_tagged(mesh, geometry::kHisBundle, 0);
+  if (e.purkinje && his_node < mesh.node_count()) add_purkinje_sites(mesh, his_node, e, stim, scenario.av_delay_ms);
+  const std::size_t apex_node = first_tagged(mesh, geometry::kLvApex, 0);
+  const std::size_t bb_node = first_tagged(mesh, geometry::kBachmannBundle, 1);
+  if (his_node < mesh.node_count()) ep.probes.push_back({"his_bundle", his_node});
+  if (apex_node < mesh.node_count()) ep.probes.push_back({"lv_apex", apex_node});
+  if (bb_node < mesh.node_count()) ep.probes.push_back({"bachmann_bundle", bb_node});
+  ep.options = tissue_options(scenario, {e.lv_cell_model, e.la_cell_model}, std::move(stimuli));
+  ep.options.domain_conductivity_scale = {1.0, e.la_conductivity_scale};  // LV, LA (ours)
+  return ep;
+}
 
 const std::vector<std::string>& electro_metric_names() {
   static const std::vector<std::string> names{
@@ -201,26 +251,13 @@ RunResult run_electro(const config::Scenario& scenario, RunControl& control) {
     stimuli.push_back({std::move(name), std::move(region), e.stimulus.amplitude_ua_per_cm2, e.stimulus.duration_ms,
                        start_ms, period_ms});
   };
+  electro::TissueOptions heart_options;
   if (heart) {
     const geometry::LeftHeart lh = geometry::build_left_heart(scenario.geometry, scenario.fluid);
-    mesh = electro::from_surfaces({&lh.body(geometry::kLvBody), &lh.body(geometry::kLaBody)});
-    models = {e.lv_cell_model, e.la_cell_model};
-    StimulusRegion bb;
-    bb.kind = StimulusRegion::Kind::kTagged;
-    bb.region_bits = geometry::kBachmannBundle;
-    bb.domain = 1;
-    stim("bachmann_bundle", bb, 0.0);
-    StimulusRegion his = bb;
-    his.region_bits = geometry::kHisBundle;
-    his.domain = 0;
-    stim("his_bundle", his, scenario.av_delay_ms);
-    const std::size_t his_node = first_tagged(mesh, geometry::kHisBundle, 0);
-    if (e.purkinje && his_node < mesh.node_count()) add_purkinje_sites(mesh, his_node, e, stim, scenario.av_delay_ms);
-    const std::size_t apex_node = first_tagged(mesh, geometry::kLvApex, 0);
-    const std::size_t bb_node = first_tagged(mesh, geometry::kBachmannBundle, 1);
-    if (his_node < mesh.node_count()) probes.push_back({"his_bundle", his_node});
-    if (apex_node < mesh.node_count()) probes.push_back({"lv_apex", apex_node});
-    if (bb_node < mesh.node_count()) probes.push_back({"bachmann_bundle", bb_node});
+    LeftHeartEp ep = left_heart_ep(scenario, lh.body(geometry::kLvBody), lh.body(geometry::kLaBody));
+    mesh = std::move(ep.mesh);
+    heart_options = std::move(ep.options);
+    probes = std::move(ep.probes);
   } else {
     const double a = e.fibre_angle_deg;
     mesh = e.mesh == "sheet" ? electro::make_sheet(e.mesh_size_x_mm, e.mesh_size_y_mm, e.mesh_spacing_mm, a)
@@ -239,19 +276,7 @@ RunResult run_electro(const config::Scenario& scenario, RunControl& control) {
   }
 
   // 2. tissue
-  electro::TissueOptions o;
-  o.formulation = electro::formulation_from_name(e.model);
-  o.splitting = electro::splitting_from_name(e.splitting);
-  o.dt_ms = e.time_step_ms;
-  o.chi_per_cm = e.surface_to_volume_per_cm;
-  o.cm_uf_per_cm2 = e.membrane_capacitance_uf_per_cm2;
-  o.sigma_i = {e.sigma_i_fibre_ms_per_cm, e.sigma_i_cross_ms_per_cm};
-  o.sigma_e = {e.sigma_e_fibre_ms_per_cm, e.sigma_e_cross_ms_per_cm};
-  o.domain_cell_models = models;
-  o.stimuli = stimuli;
-  o.activation_threshold_mv = e.activation_threshold_mv;
-  o.tension_k_kpa = scenario.tissue.active_tension_k_kpa;
-  if (heart) o.domain_conductivity_scale = {1.0, e.la_conductivity_scale};  // LV, LA (ours)
+  electro::TissueOptions o = heart ? std::move(heart_options) : tissue_options(scenario, models, stimuli);
   electro::TissueSolver tissue(std::move(mesh), std::move(o));
   const ElectroMesh& m = tissue.mesh();
 

@@ -2,8 +2,13 @@
 // Scene "electro": electrophysiology alone (solver/electro) on the procedural left heart's
 // LV and LA walls, or on a generated sheet / slab (scenario electro.mesh). See
 // docs/electro.md for the outputs and their verification.
+#include <string>
+#include <vector>
+
 #include "solver/config/scenario.h"
 #include "solver/core/run_result.h"
+#include "solver/electro/tissue.h"
+#include "solver/geometry/tri_mesh.h"
 #include "solver/scene/scene.h"
 
 namespace systole::scene {
@@ -13,5 +18,23 @@ RunResult run_electro(const config::Scenario& scenario, RunControl& control);
 // The metrics run_electro always reports (whatever the mesh); the left heart adds per-chamber
 // metrics (lv_*, la_*, av_activation_delay_ms) listed in docs/electro.md.
 const std::vector<std::string>& electro_metric_names();
+
+// The left heart's electrophysiology as the scenario sets it up, shared by the scenes that run
+// EP on the procedural (or an imported) heart: the LV (domain 0) and LA (domain 1) myocardial
+// walls of the given bodies (electro::from_surfaces, source_node filled), the cell models per
+// domain, the seed's stimuli (Bachmann bundle at t = 0, His bundle at av_delay_ms, the Purkinje
+// surrogate sites), every period, and the named probe nodes (his_bundle, lv_apex,
+// bachmann_bundle where tagged).
+struct EpProbe {
+  std::string name;
+  std::size_t node;
+};
+struct LeftHeartEp {
+  electro::ElectroMesh mesh;
+  electro::TissueOptions options;
+  std::vector<EpProbe> probes;
+};
+LeftHeartEp left_heart_ep(const config::Scenario& scenario, const geometry::TriMesh& lv,
+                          const geometry::TriMesh& la);
 
 }  // namespace systole::scene
