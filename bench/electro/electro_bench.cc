@@ -3,7 +3,9 @@
 //  2. one diffusion step (monodomain / bidomain, Godunov / Strang) on a slab;
 //  3. the Niederer et al. 2011 N-version slab (20 x 7 x 3 mm, TTP06 epi, monodomain,
 //     1.5 mm corner stimulus) at the spacings given: activation time of the far corner.
-// Usage: electro_bench [ionic|diffusion|niederer] [niederer spacings_mm...]
+//  4. threads: the reaction step of a TTP06 sheet (~5 000 nodes, 1 000 steps) on 1 and 2
+//     OpenMP threads (TissueOptions::threads), wall seconds of the reaction stage.
+// Usage: electro_bench [ionic|diffusion|niederer|threads] [niederer spacings_mm...]
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -110,8 +112,44 @@ static void niederer(const std::vector<double>& hs, double dt) {
   }
 }
 
+static void reaction_threads() {
+  std::printf("| threads | nodes | steps | reaction wall (s) | diffusion wall (s) | process CPU (s) |\n|---|---|---|---|---|---|\n");
+  for (int threads : {1, 2}) {
+    TissueOptions o;
+    o.formulation = Formulation::kMonodomain;
+    o.splitting = Splitting::kGodunov;
+    o.dt_ms = 0.05;
+    o.chi_per_cm = 1400;
+    o.cm_uf_per_cm2 = 1;
+    o.sigma_i = {7.0, 0.8};
+    o.sigma_e = {25.0, 9.5};
+    o.domain_cell_models = {"ttp06_epi"};
+    o.activation_threshold_mv = -40;
+    o.tension_k_kpa = 0;
+    StimulusSpec st;
+    st.name = "box";
+    st.region.kind = StimulusRegion::Kind::kBox;
+    st.region.box_min_mm = Vec3(-1, -1, -1);
+    st.region.box_max_mm = Vec3(1.5, 100, 100);
+    st.amplitude_ua_per_cm2 = 50;
+    st.duration_ms = 2;
+    st.start_ms = 0;
+    st.period_ms = 0;
+    o.stimuli = {st};
+    o.threads = threads;
+    TissueSolver t(make_sheet(70.0, 35.0, 0.5, 0.0), o);
+    const std::clock_t c0 = std::clock();
+    const int steps = 1000;
+    for (int s = 0; s < steps; ++s) t.step();
+    std::printf("| %d | %zu | %d | %.2f | %.2f | %.2f |\n", threads, t.mesh().node_count(), steps, t.reaction_seconds(),
+                t.diffusion_seconds(), static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
+    std::fflush(stdout);
+  }
+}
+
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
+  if (what == "threads" || what == "all") reaction_threads();
   if (what == "ionic" || what == "all") ionic_rates();
   if (what == "diffusion" || what == "all") diffusion_cost();
   if (what == "niederer" || what == "all") {

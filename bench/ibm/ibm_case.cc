@@ -1,6 +1,6 @@
 // Runs one immersed-boundary verification case (solver/scene/ibm_scene.h) and prints its
 // metrics as key = value lines. Usage:
-//   ibm_case CASE [reynolds=20] [diameter_cells=10] [box_diameters=4] [box_length=12] [end_time=5] [iterations=1]
+//   ibm_case CASE [reynolds=20] [diameter_cells=10] [box_diameters=4] [box_length=12] [end_time=5] [iterations=1] [retraction=0] [eq4=0] [carry=0]
 //            [frequency=1] [amplitude=0.01] [womersley=4] [cfl=0.2] [max_dt=0.02] [samples=50]
 #include <mpi.h>
 
@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (argc < 2) {
-    if (rank == 0) std::fprintf(stderr, "usage: ibm_case fixed_sphere|oscillating_sphere|womersley_pipe [key=value...]\n");
+    if (rank == 0) std::fprintf(stderr, "usage: ibm_case fixed_sphere|oscillating_sphere|womersley_pipe|orifice_plate [key=value...]\n");
     MPI_Finalize();
     return 2;
   }
@@ -32,6 +32,9 @@ int main(int argc, char** argv) {
     else if (k == "box_length") s.box_length_diameters = v;
     else if (k == "end_time") s.end_time = v;
     else if (k == "iterations") s.forcing_iterations = static_cast<int>(v);
+    else if (k == "retraction") s.retraction_cells = v;
+    else if (k == "eq4") s.first_node_plane = v != 0;
+    else if (k == "carry") s.carry_over_force = v != 0;
     else if (k == "frequency") s.frequency = v;
     else if (k == "amplitude") s.amplitude = v;
     else if (k == "womersley") s.womersley_number = v;
@@ -49,7 +52,8 @@ int main(int argc, char** argv) {
     for (const auto& [k, v] : r.metrics) std::printf("%s = %.6g\n", k.c_str(), v);
     if (const char* series = std::getenv("IBM_SERIES"); series && *series) {
       for (std::size_t i = 0; i < r.series[0].values.size(); ++i)
-        std::printf("series %g %g %g\n", r.series[0].values[i], r.series[1].values[i], r.series[4].values[i]);
+        std::printf("series %g %g %g %g\n", r.series[0].values[i], r.series[1].values[i], r.series[4].values[i],
+                    r.series.size() > 5 ? r.series[5].values[i] : 0.0);
     }
   }
   MPI_Finalize();

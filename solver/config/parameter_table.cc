@@ -39,6 +39,12 @@ namespace {
     p.choice = [](Scenario& s) -> std::string& { return s.member; };                      \
     return p;                                                                             \
   }()
+#define SYSTOLE_STRING(member, def, doc)                                                   \
+  [] {                                                                                    \
+    Param p{#member, Kind::kString, "", 0, 0, 0, def, {}, doc};                           \
+    p.choice = [](Scenario& s) -> std::string& { return s.member; };                      \
+    return p;                                                                             \
+  }()
 
 std::vector<std::string_view> views(const std::vector<std::string>& names) {
   return {names.begin(), names.end()};
@@ -49,7 +55,7 @@ std::vector<Param> build_table() {
   (void)inf;
   const std::vector<std::string_view> cell_models{"ttp06", "fhn", "aliev_panfilov",
                                                   "mitchell_schaeffer", "ttp06_endo", "ttp06_mid",
-                                                  "ttp06_epi"};
+                                                  "ttp06_epi", "fhn_atrial"};
   std::vector<Param> t;
   // --- run control ---------------------------------------------------------------------
   {
@@ -146,8 +152,11 @@ std::vector<Param> build_table() {
                              (std::vector<std::string_view>{}), "Ventricular cell model.");
     p.choices = cell_models;
     t.push_back(p);
-    Param q = SYSTOLE_CHOICE(electro.la_cell_model, "fhn",
-                             (std::vector<std::string_view>{}), "Atrial cell model.");
+    Param q = SYSTOLE_CHOICE(electro.la_cell_model, "fhn_atrial",
+                             (std::vector<std::string_view>{}),
+                             "Atrial cell model (fhn_atrial, ours: FitzHugh-Nagumo with a 30x faster Vm "
+                             "equation, CV ~0.9 m/s at the seed's conductivities; fhn: the Sundnes et al. "
+                             "set, ~0.13 m/s).");
     q.choices = cell_models;
     t.push_back(q);
   }
@@ -166,9 +175,10 @@ std::vector<Param> build_table() {
                              "Operator splitting: godunov (reaction, then backward-Euler diffusion) or strang "
                              "(half Crank-Nicolson diffusion, reaction, half diffusion)."));
   t.push_back(SYSTOLE_CHOICE(electro.mesh, "left_heart",
-                             (std::vector<std::string_view>{"left_heart", "sheet", "slab"}),
+                             (std::vector<std::string_view>{"left_heart", "sheet", "slab", "manifest"}),
                              "Scene 'electro': the procedural left heart (LV + LA walls, triangles), a flat "
-                             "sheet of triangles or a box slab of tetrahedra (electro.mesh_*)."));
+                             "sheet of triangles, a box slab of tetrahedra (electro.mesh_*), or an imported "
+                             "heart (electro.mesh_manifest)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(electro.mesh_size_x_mm, "mm", 20, 0, 1000,
                                     "Sheet/slab size in x (Niederer et al. 2011 slab: 20 x 7 x 3 mm)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(electro.mesh_size_y_mm, "mm", 7, 0, 1000, "Sheet/slab size in y."));
@@ -194,6 +204,14 @@ std::vector<Param> build_table() {
                                     "Left heart: factor on sigma_i and sigma_e in the LA (ours; the FHN parameter "
                                     "set conducts at ~0.17 m/s with the seed's conductivities, CV ~ sqrt(factor); a factor >= 4 "
                                     "stops the default Bachmann stimulus from exciting, docs/electro.md)."));
+  t.push_back(SYSTOLE_INT(electro.threads, "", 1, 1, 256,
+                          "OpenMP threads of the cell-model (reaction) step; the diffusion solve is serial. "
+                          "Every MPI rank runs the whole EP solve with this many threads."));
+  t.push_back(SYSTOLE_STRING(electro.mesh_manifest, "",
+                             "Scene 'electro', mesh = manifest: path of a mesh manifest (JSON, "
+                             "geometry::load_manifest) on the machine that runs the solver; relative paths "
+                             "are resolved against the solver's working directory. It must describe an LV "
+                             "and/or an LA body (names 'lv', 'la')."));
   // --- fluid (eq 1-10, MODEL.md §3) ------------------------------------------------------
   t.push_back(SYSTOLE_REAL(fluid.kinematic_viscosity_m2_per_s, "m^2/s", 4.8e-6, 1e-8, 0.1,
                            "Newtonian kinematic viscosity; Re = U_m d_m / nu = 0.0144 m^2/s / nu (seed blood "
@@ -305,11 +323,13 @@ std::vector<Param> build_table() {
                                     "breakpoints). 0.5 ms: metrics within 2e-3 mmHg of a "
                                     "converged run."));
   // --- coupling (MODEL.md §7) -------------------------------------------------------------
-  t.push_back(SYSTOLE_CHOICE(coupling.mode, "loose",
+  t.push_back(SYSTOLE_CHOICE(coupling.mode, "strong",
                              (std::vector<std::string_view>{"loose", "strong"}),
-                             "Loose (seed production runs) or strong (iterated) coupling."));
+                             "Loose (one pass per synchronisation step, the seed's production runs) or strong "
+                             "(iterated). Scene 'electromechanics': the cavity-volume constraint needs strong "
+                             "(loose blew up in the first beat, docs/electromechanics.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(coupling.strong_tolerance, "", 1e-4, 0, 0.1,
-                                    "Strong coupling: relative change of positions and velocities."));
+                                    "Strong coupling: relative change of the transferred data between passes."));
   t.push_back(SYSTOLE_INT(coupling.strong_max_iterations, "", 4, 1, 50,
                           "Strong coupling: most iterations per step."));
   // --- outputs ---------------------------------------------------------------------------
@@ -345,9 +365,10 @@ std::vector<Param> build_table() {
                              "In-plane spring law of every tissue (eq 17 'fung'; 'linear' and 'neo_hookean' share its "
                              "small-strain modulus c alpha)."));
   t.push_back(SYSTOLE_CHOICE(structure.body, "sphere",
-                             (std::vector<std::string_view>{"sphere", "sheet", "left_heart", "lv"}),
+                             (std::vector<std::string_view>{"sphere", "sheet", "left_heart", "lv", "mitral_leaflets"}),
                              "Scene 'mechanics': the body - a closed spherical shell, a square sheet clamped on its "
-                             "edges, the LV and LA of the procedural heart anchored at the valvular plane, or its LV alone."));
+                             "edges, the LV and LA of the procedural heart anchored at the valvular plane, its LV alone, "
+                             "or its two mitral leaflets anchored at the annulus (pressure = LV minus LA, closing them)."));
   t.push_back(SYSTOLE_BOOL(structure.bending, true, "Bending springs on interior edges (eq 19)."));
   t.push_back(SYSTOLE_REAL(structure.damping_per_ms, "1/ms", 0.1, 0, 100,
                            "Mass-proportional damping gamma in m x'' = F - gamma m x' (ours; 0: none)."));
@@ -373,9 +394,27 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.sheet_edge_mm, "mm", 1, 0, 50, "Body 'sheet': edge length."));
   t.push_back(SYSTOLE_BOOL(structure.write_positions, true,
                            "Scene 'mechanics': node positions at every outer step to structure.h5 + .xmf."));
+  t.push_back(SYSTOLE_BOOL(structure.contact, true,
+                           "Contact between different bodies (solver/structure/contact.h), by structure.contact_rule."));
+  t.push_back(SYSTOLE_CHOICE(structure.contact_rule, "penalty",
+                             (std::vector<std::string_view>{"penalty", "cell_average"}),
+                             "Contact rule: 'penalty' (node-to-surface, remembered sides; ours) or 'cell_average' (the "
+                             "seed's: nodes of different bodies in one cell of side contact_distance_mm take their "
+                             "mass-weighted average velocity; fails the two-sheet test, docs/structure.md)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.contact_distance_mm, "mm", 0.5, 0, 10,
+                                    "Contact layer thickness d_c: bodies are held this far apart."));
+  t.push_back(SYSTOLE_REAL(structure.contact_stiffness_kpa_per_mm, "kPa/mm", 40, 0, 1e5,
+                           "Contact penalty kappa: pressure kappa (d_c - gap) on a node inside the layer (enters the "
+                           "stable step)."));
+  t.push_back(SYSTOLE_BOOL(structure.mitral_limiter, true,
+                           "Body 'mitral_leaflets': the seed's limiter of the leaflets' displacement towards the LA "
+                           "(no chordae)."));
+  t.push_back(SYSTOLE_REAL(structure.mitral_limit_mm, "mm", 1, 0, 50,
+                           "Body 'mitral_leaflets': largest displacement of a leaflet node towards the LA (ours)."));
   // --- scene "ibm": immersed-boundary verification (nondimensional: D, U, D/U) -----------
   t.push_back(SYSTOLE_CHOICE(ibm.verification_case, "fixed_sphere",
-                             (std::vector<std::string_view>{"fixed_sphere", "oscillating_sphere", "womersley_pipe"}),
+                             (std::vector<std::string_view>{"fixed_sphere", "oscillating_sphere", "womersley_pipe",
+                                                            "orifice_plate"}),
                              "Scene 'ibm': which verification flow (docs/ibm.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(ibm.reynolds, "", 20, 0, 1e5, "Scene 'ibm': Re = U D / nu."));
   t.push_back(SYSTOLE_REAL(ibm.diameter_cells, "", 8, 4, 128, "Scene 'ibm': body diameter in grid cells (D / h)."));
@@ -396,6 +435,29 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(ibm.cfl, "", 0.2, 0, 1, "Scene 'ibm': target CFL number."));
   t.push_back(SYSTOLE_BOOL(ibm.write_fields, false,
                            "Scene 'ibm': fields (ibm_fields.h5 + .xmf) and markers (ibm_markers.csv) at the end."));
+  t.push_back(SYSTOLE_REAL(ibm.marker_retraction_cells, "", 0.5, 0, 1,
+                           "Scene 'ibm': markers retracted into the body by this fraction of h (Breugem 2012; 0 = the "
+                           "seed; 0.5 = the diffuse MLS wall's measured offset, docs/ibm.md)."));
+  t.push_back(SYSTOLE_BOOL(ibm.forcing_carry_over, false,
+                           "Scene 'ibm': each step starts from the previous step's marker force (ours; stops the leak "
+                           "of a thin MLS plate under a pressure jump, docs/ibm.md)."));
+  t.push_back(SYSTOLE_CHOICE(ibm.valvular_plane_method, "first_node",
+                             (std::vector<std::string_view>{"first_node", "mls"}),
+                             "Scene 'ibm', orifice_plate: the plate by the seed's first-external-node forcing (eq 4) or "
+                             "by MLS markers."));
+  // --- scene "electromechanics" (solver/scene/electromechanics_scene.h) -----------------------
+  t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.sync_step_ms, "ms", 1, 0, 20,
+                                    "Scene 'electromechanics': synchronisation step of the multirate scheduler "
+                                    "(a multiple of electro.time_step_ms; each module sub-cycles inside it)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.passive_stiffness_scale, "", 1000, 0, 1e4,
+                                    "Scene 'electromechanics': factor on the LV and LA Fung c (ours; provisional, calibration not done: "
+                                    "docs/electromechanics.md)."));
+  t.push_back(SYSTOLE_CHOICE(electromechanics.la_chamber, "shell",
+                             (std::vector<std::string_view>{"shell", "lumped"}),
+                             "Scene 'electromechanics': the LA as a 3-D shell wall or as the 0-D elastance chamber."));
+  t.push_back(SYSTOLE_REAL(electromechanics.field_interval_ms, "ms", 50, 0, 1e4,
+                           "Scene 'electromechanics': node positions, Vm and active tension every this over "
+                           "the last beat (em_fields.h5 + .xmf); 0: none."));
   return t;
 }
 
@@ -449,6 +511,9 @@ std::string describe_allowed(const Param& p) {
       if (p.kind == Kind::kChoiceList) out << " (each element of a list)";
       break;
     }
+    case Kind::kString:
+      out << "any text";
+      break;
   }
   return out.str();
 }
@@ -467,6 +532,7 @@ std::string parameters_markdown() {
       case Kind::kInt: def = format_number(p.default_number); break;
       case Kind::kBool: def = p.default_number != 0 ? "true" : "false"; break;
       case Kind::kChoice: def = std::string(p.default_choice); break;
+      case Kind::kString: def = p.default_choice.empty() ? "\"\"" : std::string(p.default_choice); break;
       case Kind::kRealList:
       case Kind::kChoiceList: def = "[]"; break;
     }

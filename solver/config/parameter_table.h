@@ -11,7 +11,9 @@
 
 namespace systole::config {
 
-enum class Kind { kReal, kInt, kBool, kChoice, kRealList, kChoiceList };
+// kString: free text (e.g. a server-side file path); stored through the `choice` accessor with
+// its default in default_choice.
+enum class Kind { kReal, kInt, kBool, kChoice, kRealList, kChoiceList, kString };
 
 struct Param {
   std::string_view path;  // dotted, as in the proto/JSON: "tissue.lv.fung_c_pa"
@@ -19,14 +21,14 @@ struct Param {
   std::string_view unit;  // "" for nondimensional
   double default_number;  // kReal, kInt, kBool (0/1)
   double min, max;        // inclusive range for kReal, kInt and kRealList elements
-  std::string_view default_choice;           // kChoice
+  std::string_view default_choice;           // kChoice, kString
   std::vector<std::string_view> choices;     // kChoice, kChoiceList
   std::string_view doc;
   // Exactly the accessor matching `kind` is set.
   double& (*real)(Scenario&) = nullptr;
   int& (*integer)(Scenario&) = nullptr;
   bool& (*boolean)(Scenario&) = nullptr;
-  std::string& (*choice)(Scenario&) = nullptr;
+  std::string& (*choice)(Scenario&) = nullptr;  // kChoice and kString
   std::vector<double>& (*real_list)(Scenario&) = nullptr;
   std::vector<std::string>& (*choice_list)(Scenario&) = nullptr;
   // A range bound is open (exclusive) when this is set: e.g. field_phases in [0, 1).

@@ -18,7 +18,8 @@ const std::vector<std::string>& known_scenes() {
 
 // Updated as each scene lands (its issue); see solver/scene/.
 const std::vector<std::string>& implemented_scenes() {
-  static const std::vector<std::string> scenes{"lumped", "analytic", "fluid", "electro", "mechanics", "ibm"};
+  static const std::vector<std::string> scenes{"lumped", "analytic", "fluid", "electro", "mechanics", "ibm",
+                                                "electromechanics"};
   return scenes;
 }
 
@@ -92,6 +93,13 @@ void assign(const Param& p, const nlohmann::json& value, Scenario& s,
                        describe_allowed(p).substr(std::string("one of: ").size()));
       return;
     }
+    case Kind::kString:
+      if (!value.is_string()) {
+        errors.push_back(field + " = " + show(value) + " is not a string");
+        return;
+      }
+      p.choice(s) = value.get<std::string>();
+      return;
     case Kind::kRealList: {
       if (!value.is_array()) {
         errors.push_back(field + " = " + show(value) + " is not a list of numbers");
@@ -231,6 +239,9 @@ void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
   check_geometry_rules(s.geometry, errors);
   if (!s.outputs.field_phases.empty() && s.outputs.fields.empty())
     fail("outputs.field_phases is set but outputs.fields is empty: name the fields to write");
+  if (s.electro.mesh == "manifest" && s.electro.mesh_manifest.empty())
+    fail("electro.mesh = 'manifest' needs electro.mesh_manifest: the path of a mesh manifest (JSON) on the "
+         "solver's machine");
   check_fluid_rules(s, errors);
   bool implemented = false;
   for (const auto& n : implemented_scenes()) implemented = implemented || n == s.scene;
@@ -258,7 +269,8 @@ Scenario default_scenario() {
       case Kind::kReal: p.real(s) = p.default_number; break;
       case Kind::kInt: p.integer(s) = static_cast<int>(p.default_number); break;
       case Kind::kBool: p.boolean(s) = p.default_number != 0; break;
-      case Kind::kChoice: p.choice(s) = std::string(p.default_choice); break;
+      case Kind::kChoice:
+      case Kind::kString: p.choice(s) = std::string(p.default_choice); break;
       case Kind::kRealList: p.real_list(s).clear(); break;
       case Kind::kChoiceList: p.choice_list(s).clear(); break;
     }
@@ -290,7 +302,8 @@ nlohmann::json to_json(const Scenario& scenario) {
       case Kind::kReal: out[ptr] = p.real(s); break;
       case Kind::kInt: out[ptr] = p.integer(s); break;
       case Kind::kBool: out[ptr] = p.boolean(s); break;
-      case Kind::kChoice: out[ptr] = p.choice(s); break;
+      case Kind::kChoice:
+      case Kind::kString: out[ptr] = p.choice(s); break;
       case Kind::kRealList: out[ptr] = p.real_list(s); break;
       case Kind::kChoiceList: out[ptr] = p.choice_list(s); break;
     }
@@ -338,7 +351,8 @@ void apply_override(nlohmann::json& document, const std::string& assignment) {
               : text == "false" ? nlohmann::json(false)
                                 : nlohmann::json(text);
       break;
-    case Kind::kChoice: value = text; break;
+    case Kind::kChoice:
+    case Kind::kString: value = text; break;
     case Kind::kRealList:
       value = nlohmann::json::array();
       for (const auto& part : split(text)) value.push_back(number(part));

@@ -64,6 +64,8 @@ struct Electro {
   double purkinje_conduction_velocity_m_per_s;  // delay of each site = distance / this
   int purkinje_sites;                           // early-activation sites spread over the LV
   double la_conductivity_scale;                 // factor on sigma_i, sigma_e in the LA (ours)
+  int threads;                                  // OpenMP threads of the reaction step
+  std::string mesh_manifest;                    // mesh = "manifest": server-side manifest path
 };
 
 struct Fluid {
@@ -147,6 +149,12 @@ struct Structure {
   double sheet_size_mm;
   double sheet_edge_mm;
   bool write_positions;
+  bool contact;                         // between different bodies (solver/structure/contact.h)
+  std::string contact_rule;             // "penalty" | "cell_average" (the seed's)
+  double contact_distance_mm;
+  double contact_stiffness_kpa_per_mm;
+  bool mitral_limiter;                  // body "mitral_leaflets": the seed's displacement limiter
+  double mitral_limit_mm;
 };
 
 // Scene "ibm": immersed-boundary verification flows (solver/scene/ibm_scene.h), nondimensional
@@ -164,6 +172,17 @@ struct Ibm {
   int forcing_iterations;
   double cfl;
   bool write_fields;
+  double marker_retraction_cells;
+  bool forcing_carry_over;
+  std::string valvular_plane_method;
+};
+
+// Scene "electromechanics" (solver/scene/electromechanics_scene.h).
+struct Electromechanics {
+  double sync_step_ms;             // scheduler synchronisation step, a multiple of the EP step
+  double passive_stiffness_scale;  // factor on the LV and LA Fung c in this scene (ours)
+  std::string la_chamber;          // "shell" or "lumped"
+  double field_interval_ms;        // node fields over the last beat; 0: none
 };
 
 struct Scenario {
@@ -182,6 +201,7 @@ struct Scenario {
   Analytic analytic;
   Structure structure;
   Ibm ibm;
+  Electromechanics electromechanics;
 
   double period_ms() const { return 60000.0 / heart_rate_bpm; }
 };

@@ -8,8 +8,12 @@
 
 namespace systole::electro {
 
-ApBiomarkers pace_single_cell(const std::string& name, const PacingProtocol& pr) {
+ApBiomarkers pace_single_cell(const std::string& name, const PacingProtocol& pr) { return pace_single_cell(name, pr, {}); }
+
+ApBiomarkers pace_single_cell(const std::string& name, const PacingProtocol& pr,
+                              const std::vector<std::pair<std::string, double>>& parameters) {
   auto model = ionic::make_cell_model(name, 1);
+  for (const auto& [p, value] : parameters) model->set_parameter(p, value);
   if (pr.dt_ms > model->max_stable_dt_ms())
     throw InputError("single cell: dt_ms = " + std::to_string(pr.dt_ms) + " exceeds the largest stable step of '" +
                      name + "' (" + std::to_string(model->max_stable_dt_ms()) + " ms)");

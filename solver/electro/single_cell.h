@@ -7,6 +7,7 @@
 //   (mV/ms = V/s); apd50_ms / apd90_ms: from the instant of max dVm/dt to the downward
 //   crossing of rest + 0.5 / 0.1 (peak - rest), linearly interpolated.
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace systole::electro {
@@ -25,5 +26,9 @@ struct ApBiomarkers {
 };
 
 ApBiomarkers pace_single_cell(const std::string& model, const PacingProtocol& protocol);
+// The same with model parameters overridden by name first (CellModel::set_parameter; an unknown
+// name is an InputError).
+ApBiomarkers pace_single_cell(const std::string& model, const PacingProtocol& protocol,
+                              const std::vector<std::pair<std::string, double>>& parameters);
 
 }  // namespace systole::electro

@@ -55,6 +55,9 @@ struct TissueOptions {
   // Optional factor (> 0) on sigma_i and sigma_e per mesh domain (empty: 1 everywhere); a cell
   // takes the factor of its first node's domain (ours; e.g. the atrial conductivity scale).
   std::vector<double> domain_conductivity_scale = {};
+  // OpenMP threads of the reaction step (cell models over disjoint node ranges), in [1, 256];
+  // the diffusion solve stays serial (ours). 1: no threading.
+  int threads = 1;
 };
 
 // The monodomain conductivity of a (sigma_i, sigma_e) pair (fibre-wise harmonic mean).

@@ -17,7 +17,7 @@ void validate(const ForcingParameters& p) {
 
 DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, ForcingParameters parameters)
     : slabs_(slabs), markers_(markers), par_((validate(parameters), parameters)), transfer_(slabs, markers) {
-  if (par_.iterations > 1) {
+  if (par_.iterations > 1 || par_.carry_over) {
     work_u_ = std::make_unique<grid::XFaceField>(slabs);
     work_v_ = std::make_unique<grid::YFaceField>(slabs);
     work_w_ = std::make_unique<grid::ZFaceField>(slabs);
@@ -48,10 +48,27 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   force_.assign(n, Vec3::Zero());
   increment_.assign(n, Vec3::Zero());
   report_ = ForcingReport{};
+  // u* = û + Δt f on the interior, halos exchanged (the multi-direct passes, the carry-over).
+  auto update = [&](const auto& uh, const auto& ff, auto& work) {
+    for (int k = 0; k < work.k_count(); ++k)
+      for (int j = 0; j < work.ny(); ++j)
+        for (int i = 0; i < work.nx(); ++i) work(i, j, k) = uh(i, j, k) + dt * ff(i, j, k);
+    grid::exchange_halos(work, slabs_);
+  };
   // Pass 1 (eq 3): F = (V_b − û(X_b))/Δt, spread (eq 6).
   std::vector<Vec3> U = transfer_.interpolate(u_hat);
   for (Vec3& x : U) x += dt * uniform_force;
   report_.slip_before = slip_of(U);
+  if (par_.carry_over && previous_.size() == n) {
+    // Start from the previous step's force (active markers only), then correct what it leaves.
+    for (std::size_t b = 0; b < n; ++b) force_[b] = markers_.active(b) ? previous_[b] : Vec3::Zero();
+    transfer_.spread(force_, f);
+    update(u_hat.u, f.u, *work_u_);
+    update(u_hat.v, f.v, *work_v_);
+    update(u_hat.w, f.w, *work_w_);
+    U = transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_});
+    for (Vec3& x : U) x += dt * uniform_force;
+  }
   report_.slip_after = report_.slip_before;
   for (int pass = 0; pass < par_.iterations; ++pass) {
     for (std::size_t b = 0; b < n; ++b)
@@ -60,13 +77,7 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     transfer_.spread(increment_, f);
     ++report_.iterations;
     if (par_.iterations == 1) break;  // the seed's single pass: no re-interpolation
-    // u* = û + Δt f on the interior, halos exchanged, then interpolate again (multi-direct).
-    auto update = [&](const auto& uh, const auto& ff, auto& work) {
-      for (int k = 0; k < work.k_count(); ++k)
-        for (int j = 0; j < work.ny(); ++j)
-          for (int i = 0; i < work.nx(); ++i) work(i, j, k) = uh(i, j, k) + dt * ff(i, j, k);
-      grid::exchange_halos(work, slabs_);
-    };
+    // then interpolate u* = û + Δt f again (multi-direct).
     update(u_hat.u, f.u, *work_u_);
     update(u_hat.v, f.v, *work_v_);
     update(u_hat.w, f.w, *work_w_);
@@ -78,6 +89,7 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   Vec3 total = Vec3::Zero();
   for (std::size_t b = 0; b < n; ++b) total += force_[b] * markers_.forcing_volume(b);
   report_.total_force = total;
+  if (par_.carry_over) previous_ = force_;
   return report_;
 }
 

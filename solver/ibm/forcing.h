@@ -17,6 +17,15 @@ namespace systole::ibm {
 
 struct ForcingParameters {
   int iterations = 1;  // forcing passes per step, [1, 20]; 1 = the seed's single pass
+  // Carry the force over (ours): each step starts from the previous step's Lagrangian force
+  // F^{n−1} (spread, and û + Δt f re-interpolated) and adds the direct-forcing correction,
+  // F^n = F^{n−1} + (V_b − (û + Δt f^{n−1})(X_b))/Δt: the integral part of the feedback forcing
+  // of Goldstein, Handler & Sirovich (1993, J. Comput. Phys. 105:354) with gain 1/Δt. A single
+  // pass removes only a fraction of the slip (overlapping supports), so under a steady load
+  // (the pressure jump across a thin plate) the seed's forcing leaves a steady slip ∝ Δt ∇p —
+  // a leak through the plate; carried over, the slip of a steady load goes to 0. Costs one
+  // more interpolation and spreading per step (markers switched on start from F = 0).
+  bool carry_over = false;
 };
 void validate(const ForcingParameters& p);
 
@@ -60,7 +69,7 @@ class DirectForcing {
   const Markers& markers_;
   ForcingParameters par_;
   Transfer transfer_;
-  std::vector<Vec3> force_, increment_;
+  std::vector<Vec3> force_, increment_, previous_;
   ForcingReport report_;
   // Work velocity û + Δt f of the multi-direct passes (allocated when iterations > 1).
   std::unique_ptr<grid::XFaceField> work_u_;

@@ -20,7 +20,10 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
   const std::size_t n = points.size();
   // 10 values per point: p, then ∂u/∂x_j, ∂v/∂x_j, ∂w/∂x_j.
   std::vector<double> local(10 * n, 0.0), global(10 * n, 0.0);
-  for (std::size_t q = 0; q < n; ++q) {
+  // Each point writes its own row: threads over points, no races.
+#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(n) >= kThreadedMarkers)
+  for (std::ptrdiff_t qq = 0; qq < static_cast<std::ptrdiff_t>(n); ++qq) {
+    const std::size_t q = static_cast<std::size_t>(qq);
     double* row = local.data() + 10 * q;
     const MlsStencil sp = mls_stencil(g, Location::cell, points[q]);
     if (transfer.owns_plane(sp.k_centre)) row[0] = apply_stencil(p, sp, sp.phi);
@@ -57,10 +60,10 @@ MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, 
   for (std::size_t b = 0; b < n; ++b) {
     if (!markers.active(b)) continue;
     plus[b] = static_cast<std::ptrdiff_t>(points.size());
-    points.push_back(m.position[b] + h * m.normal[b]);
+    points.push_back(m.surface[b] + h * m.normal[b]);
     if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
       minus[b] = static_cast<std::ptrdiff_t>(points.size());
-      points.push_back(m.position[b] - h * m.normal[b]);
+      points.push_back(m.surface[b] - h * m.normal[b]);
     }
   }
   const ProbeValues pv = probe(transfer, u, p, points);

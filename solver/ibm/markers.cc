@@ -41,6 +41,17 @@ int Markers::add_body(const geometry::TriMesh& mesh_mm, const std::string& name,
     m << "ibm body '" << name << "': tiling_level = " << o.tiling_level << " must be >= 0 (0: automatic)";
     throw InputError(m.str());
   }
+  if (!(o.retraction_cells >= 0 && o.retraction_cells <= 1)) {
+    std::ostringstream m;
+    m << "ibm body '" << name << "': retraction_cells = " << o.retraction_cells << " is out of range [0, 1]";
+    throw InputError(m.str());
+  }
+  if (o.retraction_cells > 0 && o.sides == Sides::two) {
+    std::ostringstream m;
+    m << "ibm body '" << name << "': retraction_cells = " << o.retraction_cells
+      << " on a two-sided body (blood on both sides: there is no inside to retract into); use 0";
+    throw InputError(m.str());
+  }
   if (mesh_mm.tri.empty()) throw InputError("ibm body '" + name + "' has no triangles");
   mesh_mm.check_arrays();
   const double target_mm = o.spacing_fraction * h_ * o.mm_per_unit;  // tile edge target
@@ -67,6 +78,7 @@ int Markers::add_body(const geometry::TriMesh& mesh_mm, const std::string& name,
   const int index = static_cast<int>(bodies_.size());
   for (std::size_t t = 0; t < b.tiled.triangle_count(); ++t) {
     m_.position.push_back(Vec3::Zero());
+    m_.surface.push_back(Vec3::Zero());
     m_.normal.push_back(Vec3::Zero());
     m_.velocity.push_back(Vec3::Zero());
     m_.area.push_back(0);
@@ -104,14 +116,16 @@ void Markers::check_body(const Body& b) const {
 void Markers::update() {
   for (const Body& b : bodies_) {
     const auto& P = b.tiled.position_mm;
+    const double retraction = b.options.retraction_cells * h_;
     for (std::size_t t = 0; t < b.marker_count; ++t) {
       const std::size_t q = b.first_marker + t;
       const auto& n = b.tiled.tri[t];
       const Vec3 av = (P[n[1]] - P[n[0]]).cross(P[n[2]] - P[n[0]]);
       const double two_a = av.norm();
-      m_.position[q] = (P[n[0]] + P[n[1]] + P[n[2]]) / 3.0;
+      m_.surface[q] = (P[n[0]] + P[n[1]] + P[n[2]]) / 3.0;
       m_.area[q] = 0.5 * two_a;
       m_.normal[q] = two_a > 0 ? Vec3(av / two_a) : Vec3::Zero();
+      m_.position[q] = m_.surface[q] - retraction * m_.normal[q];
       m_.velocity[q] = (b.node_velocity[n[0]] + b.node_velocity[n[1]] + b.node_velocity[n[2]]) / 3.0;
     }
   }

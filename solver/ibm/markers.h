@@ -44,6 +44,13 @@ struct BodyOptions {
   Sides sides = Sides::one;
   ExpectedNormals normals = ExpectedNormals::unchecked;
   bool rigid = true;               // rigid: moved only by set_rigid_motion()/advance_rigid()
+  // Retraction r_d (ours, after Breugem 2012 J. Comput. Phys. 231:4469, §2.3 and §3.1, r_d ≈ 0.3):
+  // the forcing point of each marker is moved off the surface, away from the blood, by
+  // r_d·h along the normal (X = centroid − r_d h n), in [0, 1]. The diffuse forcing acts over
+  // ≈ ±h around the markers and makes the body look thicker by a fraction of h; retracting the
+  // markers compensates it to leading order. One-sided bodies only (a two-sided leaflet has
+  // blood on both sides: r_d must be 0). The loads' probes stay at the surface + h n.
+  double retraction_cells = 0.0;
 };
 
 struct Body {
@@ -61,7 +68,9 @@ struct Body {
 
 // All markers, structure of arrays, nondimensional.
 struct MarkerArrays {
-  std::vector<Vec3> position, normal, velocity;
+  // position: the forcing point (the tile centroid, moved by −r_d h n when the body's
+  // retraction_cells r_d > 0); surface: the tile centroid on the surface (the loads' base).
+  std::vector<Vec3> position, surface, normal, velocity;
   std::vector<double> area;                      // tile area
   std::vector<std::int32_t> body;                // index into Markers::bodies()
   std::vector<std::array<std::int32_t, 3>> node; // the tile's nodes in its body's tiled mesh

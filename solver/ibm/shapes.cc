@@ -68,9 +68,10 @@ geometry::TriMesh tube_mesh(double x0_mm, double length_mm, double axis_y_mm, do
   auto id = [&](int a, int r) { return a * n_around + (r % n_around); };
   for (int a = 0; a < n_axial; ++a)
     for (int r = 0; r < n_around; ++r) {
-      // (a,r) → (a,r+1) → (a+1,r): normal = e_θ × e_x = −e_r (into the lumen).
-      m.add_triangle(id(a, r), id(a, r + 1), id(a + 1, r), Tissue::kAorticWall, 1.0);
-      m.add_triangle(id(a, r + 1), id(a + 1, r + 1), id(a + 1, r), Tissue::kAorticWall, 1.0);
+      // (a,r) → (a+1,r) → (a,r+1): normal = e_x × e_θ = −e_r (into the lumen). (Fixed
+      // 2026-12-01: the previous order gave e_θ × e_x = +e_r, outward, against the contract.)
+      m.add_triangle(id(a, r), id(a + 1, r), id(a, r + 1), Tissue::kAorticWall, 1.0);
+      m.add_triangle(id(a, r + 1), id(a + 1, r), id(a + 1, r + 1), Tissue::kAorticWall, 1.0);
     }
   return m;
 }
@@ -95,6 +96,39 @@ geometry::TriMesh plate_with_hole_mesh(double x0_mm, double y0_mm, double side_m
       // (s,r) → (s+1,r) → (s,r+1): e_ρ × e_θ = +z.
       m.add_triangle(id(s, r), id(s + 1, r), id(s, r + 1), Tissue::kValvularPlane, 1.0);
       m.add_triangle(id(s, r + 1), id(s + 1, r), id(s + 1, r + 1), Tissue::kValvularPlane, 1.0);
+    }
+  return m;
+}
+
+geometry::TriMesh perforated_plate_x_mesh(double x_mm, double y0_mm, double ly_mm, double z0_mm, double lz_mm,
+                                          double yc_mm, double zc_mm, double hole_radius_mm, int ny, int nz,
+                                          PlatePart part) {
+  geometry::TriMesh m;
+  m.name = part == PlatePart::plate ? "orifice plate" : "orifice cover";
+  m.kind = geometry::BodyKind::kRigid;
+  auto node = [&](int j, int k) { return Eigen::Vector3d(x_mm, y0_mm + ly_mm * j / ny, z0_mm + lz_mm * k / nz); };
+  std::map<int, std::int32_t> used;  // grid node → mesh node (only the nodes of kept triangles)
+  auto id = [&](int j, int k) {
+    const int key = k * (ny + 1) + j;
+    auto it = used.find(key);
+    if (it != used.end()) return it->second;
+    const std::int32_t n = m.add_node(node(j, k));
+    used.emplace(key, n);
+    return n;
+  };
+  auto keep = [&](const Eigen::Vector3d& c) {
+    const bool inside = std::hypot(c.y() - yc_mm, c.z() - zc_mm) < hole_radius_mm;
+    return part == PlatePart::cover ? inside : !inside;
+  };
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j) {
+      // (j,k) → (j+1,k) → (j+1,k+1): e_y × e_z = +x; and (j,k) → (j+1,k+1) → (j,k+1).
+      const int tri[2][3][2] = {{{j, k}, {j + 1, k}, {j + 1, k + 1}}, {{j, k}, {j + 1, k + 1}, {j, k + 1}}};
+      for (const auto& t : tri) {
+        const Eigen::Vector3d c = (node(t[0][0], t[0][1]) + node(t[1][0], t[1][1]) + node(t[2][0], t[2][1])) / 3.0;
+        if (!keep(c)) continue;
+        m.add_triangle(id(t[0][0], t[0][1]), id(t[1][0], t[1][1]), id(t[2][0], t[2][1]), Tissue::kValvularPlane, 1.0);
+      }
     }
   return m;
 }

@@ -22,6 +22,17 @@ geometry::TriMesh tube_mesh(double x0_mm, double length_mm, double axis_y_mm, do
 geometry::TriMesh plate_with_hole_mesh(double x0_mm, double y0_mm, double side_mm, double z_mm, double hole_radius_mm,
                                        int n_radial, int n_around);
 
+// The rectangle y ∈ [y0, y0+ly], z ∈ [z0, z0+lz] in the plane x = x_mm, ny × nz quads split in
+// two, normal +x, and a circular opening of radius hole_radius_mm centred at (yc, zc): the
+// plate keeps the triangles whose centroid lies outside the circle (part = plate), the cover
+// the ones inside (part = cover), so plate and cover tile the rectangle exactly (the rim is
+// staircased at the quad size, like eq 4's on the grid). The orifice plate of the scene's
+// orifice_plate case and the cover switched on and off to close the opening.
+enum class PlatePart { plate, cover };
+geometry::TriMesh perforated_plate_x_mesh(double x_mm, double y0_mm, double ly_mm, double z0_mm, double lz_mm,
+                                          double yc_mm, double zc_mm, double hole_radius_mm, int ny, int nz,
+                                          PlatePart part);
+
 // A full rectangle [x0, x0+lx]×[y0, y0+ly] at z = z_mm, nx × ny quads split in two, normal +z:
 // a rigid plane spanning a periodic box (the valvular plane without its orifices).
 geometry::TriMesh plate_mesh(double x0_mm, double y0_mm, double lx_mm, double ly_mm, double z_mm, int nx, int ny);

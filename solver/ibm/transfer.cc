@@ -1,6 +1,7 @@
 #include "solver/ibm/transfer.h"
 
 #include <mpi.h>
+#include <omp.h>
 
 #include <algorithm>
 
@@ -24,28 +25,51 @@ void Transfer::rebuild() {
   const MarkerArrays& m = markers_.markers();
   const int lo = slabs_.k_begin(), hi = slabs_.k_begin() + slabs_.k_count();  // [lo, hi)
   const Location where[3] = {Location::x_face, Location::y_face, Location::z_face};
+  // Threads take contiguous blocks of markers in thread order (schedule(static), OpenMP 5.1
+  // §2.11.4) and keep their own lists; concatenated in thread order they are in marker order —
+  // the order spreading accumulates in, so the result does not depend on the thread count.
+  const std::size_t n = m.size();
+  const int nt = static_cast<std::ptrdiff_t>(n) >= kThreadedMarkers ? omp_get_max_threads() : 1;
+  std::vector<std::array<std::vector<Entry>, 3>> parts(static_cast<std::size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    auto& mine = parts[static_cast<std::size_t>(omp_get_thread_num())];
+    for (auto& list : mine) list.reserve(n / static_cast<std::size_t>(nt) + 1);  // one rank holds ≈ all
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t bb = 0; bb < static_cast<std::ptrdiff_t>(n); ++bb) {
+      const std::size_t b = static_cast<std::size_t>(bb);
+      if (!markers_.active(b)) continue;
+      for (int c = 0; c < 3; ++c) {
+        // Cheap pre-check on the z extent before building the stencil (support: centre ± 1).
+        const double off = where[c] == Location::z_face ? 0.0 : 0.5;
+        const int kc = static_cast<int>(std::lround(m.position[b].z() / g.dz() - off));
+        if (kc + 1 < lo - 1 || kc - 1 > hi) continue;
+        Entry e{b, false, false, mls_stencil(g, where[c], m.position[b])};
+        e.owner = owns_plane(e.stencil.k_centre);
+        e.spreads = e.stencil.k0 + 2 >= lo && e.stencil.k0 < hi;
+        if (e.owner || e.spreads) mine[c].push_back(e);
+      }
+    }
+  }
   for (int c = 0; c < 3; ++c) {
     std::vector<Entry>& list = entries_[c];
     list.clear();
-    for (std::size_t b = 0; b < m.size(); ++b) {
-      if (!markers_.active(b)) continue;
-      // Cheap pre-check on the z extent before building the stencil (support: centre ± 1).
-      const double off = where[c] == Location::z_face ? 0.0 : 0.5;
-      const int kc = static_cast<int>(std::lround(m.position[b].z() / g.dz() - off));
-      if (kc + 1 < lo - 1 || kc - 1 > hi) continue;
-      Entry e{b, false, false, mls_stencil(g, where[c], m.position[b])};
-      e.owner = owns_plane(e.stencil.k_centre);
-      e.spreads = e.stencil.k0 + 2 >= lo && e.stencil.k0 < hi;
-      if (e.owner || e.spreads) list.push_back(e);
-    }
+    std::size_t total = 0;
+    for (const auto& part : parts) total += part[c].size();
+    list.reserve(total);
+    for (auto& part : parts) list.insert(list.end(), part[c].begin(), part[c].end());
   }
 }
 
 template <grid::Location L>
 void Transfer::interpolate_component(const grid::Field<L>& f, const std::vector<Entry>& entries, int c,
                                      std::vector<double>& out) const {
-  for (const Entry& e : entries)
+  // Each entry writes its own marker's slot: no races.
+#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(entries.size()) >= kThreadedMarkers)
+  for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(entries.size()); ++q) {
+    const Entry& e = entries[static_cast<std::size_t>(q)];
     if (e.owner) out[3 * e.marker + c] = apply_stencil(f, e.stencil, e.stencil.phi);
+  }
 }
 
 std::vector<Vec3> Transfer::interpolate(const ConstVelocityView& u) const {
@@ -89,9 +113,14 @@ void Transfer::spread_component(const std::vector<Entry>& entries, int c, const 
 }
 
 void Transfer::spread(const std::vector<Vec3>& force_density, VelocityView f) const {
-  spread_component(entries_[0], 0, force_density, f.u);
-  spread_component(entries_[1], 1, force_density, f.v);
-  spread_component(entries_[2], 2, force_density, f.w);
+  // One thread per component: each writes only its own field, in marker order (race-free and
+  // bitwise independent of the thread count).
+#pragma omp parallel for schedule(static, 1) if (static_cast<std::ptrdiff_t>(markers_.size()) >= kThreadedMarkers)
+  for (int c = 0; c < 3; ++c) {
+    if (c == 0) spread_component(entries_[0], 0, force_density, f.u);
+    if (c == 1) spread_component(entries_[1], 1, force_density, f.v);
+    if (c == 2) spread_component(entries_[2], 2, force_density, f.w);
+  }
 }
 
 }  // namespace systole::ibm

@@ -34,6 +34,11 @@ struct VelocityView {
   grid::ZFaceField& w;
 };
 
+// Loops over fewer markers than this run on one thread (ours): a parallel region costs a
+// fork/join and, on an oversubscribed machine, a time slice per barrier — measured: the Womersley
+// CI case (5 334 markers) went from 8 s to 150 s wall with threads on every loop under load.
+inline constexpr std::ptrdiff_t kThreadedMarkers = 20000;
+
 class Transfer {
  public:
   // Builds the stencils of `markers`' active markers that this rank needs. Collective: no

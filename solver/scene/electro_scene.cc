@@ -1,5 +1,6 @@
 // Scene "electro" (docs/electro.md):
-//  1. mesh: left heart (LV domain 0 + LA domain 1, geometry::build_left_heart) or sheet / slab;
+//  1. mesh: left heart (LV domain 0 + LA domain 1, geometry::build_left_heart), an imported heart
+//     (mesh = "manifest": the lv and/or la bodies of electro.mesh_manifest) or sheet / slab;
 //  2. tissue: mono/bidomain (eq 21-22) with the scenario's conductivities, chi, C_m, time step
 //     and splitting; cell models per domain (lv_cell_model, la_cell_model);
 //  3. stimuli: left heart -> Bachmann bundle (LA, t = 0) and His bundle (LV, t = av_delay_ms),
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -25,6 +27,7 @@
 #include "solver/core/errors.h"
 #include "solver/electro/tissue.h"
 #include "solver/geometry/left_heart.h"
+#include "solver/geometry/mesh_io.h"
 
 namespace systole::scene {
 namespace {
@@ -144,12 +147,12 @@ void write_fields(const std::filesystem::path& dir, const ElectroMesh& m,
 constexpr double kPurkinjeSiteRadiusMm = 3.0;  // ours: >= 1.5 edges of the 2 mm default mesh
 
 template <class Stim>
-void add_purkinje_sites(const ElectroMesh& m, std::size_t his_node, const config::Electro& e, Stim&& stim,
-                        double av_delay_ms) {
+void add_purkinje_sites(const ElectroMesh& m, std::size_t his_node, int lv_domain, const config::Electro& e,
+                        Stim&& stim, double av_delay_ms) {
   std::vector<double> dist(m.node_count(), std::numeric_limits<double>::infinity());
   auto update = [&](std::size_t from) {
     for (std::size_t i = 0; i < m.node_count(); ++i)
-      if (m.node_domain[i] == 0) dist[i] = std::min(dist[i], (m.position_mm[i] - m.position_mm[from]).norm());
+      if (m.node_domain[i] == lv_domain) dist[i] = std::min(dist[i], (m.position_mm[i] - m.position_mm[from]).norm());
   };
   update(his_node);
   const Vec3 his = m.position_mm[his_node];
@@ -157,7 +160,7 @@ void add_purkinje_sites(const ElectroMesh& m, std::size_t his_node, const config
     std::size_t far = m.node_count();
     double d = 0;
     for (std::size_t i = 0; i < m.node_count(); ++i)
-      if (m.node_domain[i] == 0 && dist[i] > d) {
+      if (m.node_domain[i] == lv_domain && dist[i] > d) {
         d = dist[i];
         far = i;
       }
@@ -167,7 +170,7 @@ void add_purkinje_sites(const ElectroMesh& m, std::size_t his_node, const config
     r.kind = StimulusRegion::Kind::kSphere;
     r.centre_mm = m.position_mm[far];
     r.radius_mm = kPurkinjeSiteRadiusMm;
-    r.domain = 0;
+    r.domain = lv_domain;
     stim("purkinje_site_" + std::to_string(k), r,
          av_delay_ms + (m.position_mm[far] - his).norm() / e.purkinje_conduction_velocity_m_per_s);
   }
@@ -190,6 +193,7 @@ electro::TissueOptions tissue_options(const config::Scenario& scenario, std::vec
   o.stimuli = std::move(stimuli);
   o.activation_threshold_mv = e.activation_threshold_mv;
   o.tension_k_kpa = scenario.tissue.active_tension_k_kpa;
+  o.threads = e.threads;
   return o;
 }
 
@@ -197,6 +201,40 @@ electro::TissueOptions tissue_options(const config::Scenario& scenario, std::vec
 
 LeftHeartEp left_heart_ep(const config::Scenario& scenario, const geometry::TriMesh& lv,
                           const geometry::TriMesh& la) {
+  return heart_ep(scenario, &lv, &la);
+}
+
+std::vector<geometry::TriMesh> load_electro_manifest(const std::string& path) {
+  namespace fs = std::filesystem;
+  const std::string field = "electro.mesh_manifest = '" + path + "'";
+  std::error_code ec;
+  const fs::path p(path);
+  if (path.empty()) throw InputError("electro.mesh_manifest is empty: give the path of a mesh manifest (JSON)");
+  if (!fs::exists(p, ec))
+    throw InputError(field + ": no such file on the solver's machine (relative paths resolve against " +
+                     fs::current_path(ec).string() + ")");
+  if (!fs::is_regular_file(p, ec)) throw InputError(field + ": not a regular file");
+  geometry::ImportedHeart heart;
+  try {
+    heart = geometry::load_manifest(p);
+  } catch (const InputError& err) {
+    throw InputError(field + ": " + err.what());
+  }
+  std::vector<geometry::TriMesh> bodies;
+  std::string names;
+  for (auto& b : heart.bodies) {
+    names += (names.empty() ? "" : ", ") + ("'" + b.name + "'");
+    if (b.name == geometry::kLvBody || b.name == geometry::kLaBody) bodies.push_back(std::move(b));
+  }
+  if (bodies.empty())
+    throw InputError(field + ": no body named 'lv' or 'la' (the manifest has " + (names.empty() ? "no bodies" : names) +
+                     "); the electro scene needs an LV and/or an LA");
+  return bodies;
+}
+
+LeftHeartEp heart_ep(const config::Scenario& scenario, const geometry::TriMesh* lv_body,
+                     const geometry::TriMesh* la_body) {
+  if (!lv_body && !la_body) throw InputError("electro: a heart needs an LV and/or an LA body");
   const config::Electro& e = scenario.electro;
   const double period_ms = scenario.period_ms();
   std::vector<StimulusSpec> stimuli;
@@ -205,26 +243,49 @@ LeftHeartEp left_heart_ep(const config::Scenario& scenario, const geometry::TriM
                        start_ms, period_ms});
   };
   LeftHeartEp ep;
-  ep.mesh = electro::from_surfaces({&lv, &la});
+  std::vector<const geometry::TriMesh*> bodies;
+  std::vector<std::string> models;
+  std::vector<double> scale;
+  ep.lv_domain = ep.la_domain = -1;
+  if (lv_body) {
+    ep.lv_domain = static_cast<int>(bodies.size());
+    bodies.push_back(lv_body);
+    models.push_back(e.lv_cell_model);
+    scale.push_back(1.0);
+  }
+  if (la_body) {
+    ep.la_domain = static_cast<int>(bodies.size());
+    bodies.push_back(la_body);
+    models.push_back(e.la_cell_model);
+    scale.push_back(e.la_conductivity_scale);  // ours
+  }
+  ep.mesh = electro::from_surfaces(bodies);
   const ElectroMesh& mesh = ep.mesh;
-  StimulusRegion bb;
-  bb.kind = StimulusRegion::Kind::kTagged;
-  bb.region_bits = geometry::kBachmannBundle;
-  bb.domain = 1;
-  stim("bachmann_bundle", bb, 0.0);
-  StimulusRegion his = bb;
-  his.region_bits = geometry::kHisBundle;
-  his.domain = 0;
-  stim("his_bundle", his, scenario.av_delay_ms);
-  const std::size_t his_node = first_tagged(mesh, geometry::kHisBundle, 0);
-  if (e.purkinje && his_node < mesh.node_count()) add_purkinje_sites(mesh, his_node, e, stim, scenario.av_delay_ms);
-  const std::size_t apex_node = first_tagged(mesh, geometry::kLvApex, 0);
-  const std::size_t bb_node = first_tagged(mesh, geometry::kBachmannBundle, 1);
-  if (his_node < mesh.node_count()) ep.probes.push_back({"his_bundle", his_node});
-  if (apex_node < mesh.node_count()) ep.probes.push_back({"lv_apex", apex_node});
-  if (bb_node < mesh.node_count()) ep.probes.push_back({"bachmann_bundle", bb_node});
-  ep.options = tissue_options(scenario, {e.lv_cell_model, e.la_cell_model}, std::move(stimuli));
-  ep.options.domain_conductivity_scale = {1.0, e.la_conductivity_scale};  // LV, LA (ours)
+  const std::size_t n = mesh.node_count();
+  std::size_t his_node = n, apex_node = n, bb_node = n;
+  if (ep.la_domain >= 0) {
+    StimulusRegion bb;
+    bb.kind = StimulusRegion::Kind::kTagged;
+    bb.region_bits = geometry::kBachmannBundle;
+    bb.domain = ep.la_domain;
+    stim("bachmann_bundle", bb, 0.0);
+    bb_node = first_tagged(mesh, geometry::kBachmannBundle, ep.la_domain);
+  }
+  if (ep.lv_domain >= 0) {
+    StimulusRegion his;
+    his.kind = StimulusRegion::Kind::kTagged;
+    his.region_bits = geometry::kHisBundle;
+    his.domain = ep.lv_domain;
+    stim("his_bundle", his, scenario.av_delay_ms);
+    his_node = first_tagged(mesh, geometry::kHisBundle, ep.lv_domain);
+    if (e.purkinje && his_node < n) add_purkinje_sites(mesh, his_node, ep.lv_domain, e, stim, scenario.av_delay_ms);
+    apex_node = first_tagged(mesh, geometry::kLvApex, ep.lv_domain);
+  }
+  if (his_node < n) ep.probes.push_back({"his_bundle", his_node});
+  if (apex_node < n) ep.probes.push_back({"lv_apex", apex_node});
+  if (bb_node < n) ep.probes.push_back({"bachmann_bundle", bb_node});
+  ep.options = tissue_options(scenario, std::move(models), std::move(stimuli));
+  ep.options.domain_conductivity_scale = std::move(scale);
   return ep;
 }
 
@@ -240,7 +301,7 @@ const std::vector<std::string>& electro_metric_names() {
 RunResult run_electro(const config::Scenario& scenario, RunControl& control) {
   const config::Electro& e = scenario.electro;
   const double period_ms = scenario.period_ms();
-  const bool heart = e.mesh == "left_heart";
+  const bool heart = e.mesh == "left_heart" || e.mesh == "manifest";
 
   // 1. mesh, cell models per domain, stimuli, probes
   ElectroMesh mesh;
@@ -252,12 +313,23 @@ RunResult run_electro(const config::Scenario& scenario, RunControl& control) {
                        start_ms, period_ms});
   };
   electro::TissueOptions heart_options;
+  int lv_domain = -1, la_domain = -1;
   if (heart) {
-    const geometry::LeftHeart lh = geometry::build_left_heart(scenario.geometry, scenario.fluid);
-    LeftHeartEp ep = left_heart_ep(scenario, lh.body(geometry::kLvBody), lh.body(geometry::kLaBody));
+    LeftHeartEp ep;
+    if (e.mesh == "manifest") {
+      const std::vector<geometry::TriMesh> bodies = load_electro_manifest(e.mesh_manifest);
+      const geometry::TriMesh *lv = nullptr, *la = nullptr;
+      for (const auto& b : bodies) (b.name == geometry::kLvBody ? lv : la) = &b;
+      ep = heart_ep(scenario, lv, la);
+    } else {
+      const geometry::LeftHeart lh = geometry::build_left_heart(scenario.geometry, scenario.fluid);
+      ep = left_heart_ep(scenario, lh.body(geometry::kLvBody), lh.body(geometry::kLaBody));
+    }
     mesh = std::move(ep.mesh);
     heart_options = std::move(ep.options);
     probes = std::move(ep.probes);
+    lv_domain = ep.lv_domain;
+    la_domain = ep.la_domain;
   } else {
     const double a = e.fibre_angle_deg;
     mesh = e.mesh == "sheet" ? electro::make_sheet(e.mesh_size_x_mm, e.mesh_size_y_mm, e.mesh_spacing_mm, a)
@@ -334,7 +406,11 @@ RunResult run_electro(const config::Scenario& scenario, RunControl& control) {
     bm["activated_fraction"] = all.activated_fraction;
     bm["mean_apd90_ms"] = all.mean_apd90_ms;
     if (heart) {
-      const DomainStats lv = domain_stats(m, tissue.activation(), 0, t0), la = domain_stats(m, tissue.activation(), 1, t0);
+      // A chamber the (imported) heart lacks reports NaN, i.e. -1 in metrics.json.
+      DomainStats absent;
+      absent.activated_fraction = std::numeric_limits<double>::quiet_NaN();
+      const DomainStats lv = lv_domain >= 0 ? domain_stats(m, tissue.activation(), lv_domain, t0) : absent;
+      const DomainStats la = la_domain >= 0 ? domain_stats(m, tissue.activation(), la_domain, t0) : absent;
       bm["lv_first_activation_ms"] = lv.first_ms;
       bm["lv_total_activation_time_ms"] = lv.last_ms - lv.first_ms;
       bm["lv_activated_fraction"] = lv.activated_fraction;

@@ -1,7 +1,8 @@
 #pragma once
 // Scene "electro": electrophysiology alone (solver/electro) on the procedural left heart's
-// LV and LA walls, or on a generated sheet / slab (scenario electro.mesh). See
-// docs/electro.md for the outputs and their verification.
+// LV and LA walls, on an imported heart (electro.mesh = "manifest": the LV and/or LA bodies of
+// a geometry::load_manifest manifest), or on a generated sheet / slab (scenario electro.mesh).
+// See docs/electro.md for the outputs and their verification.
 #include <string>
 #include <vector>
 
@@ -33,8 +34,21 @@ struct LeftHeartEp {
   electro::ElectroMesh mesh;
   electro::TissueOptions options;
   std::vector<EpProbe> probes;
+  int lv_domain = 0, la_domain = 1;  // mesh domain of each chamber; -1 if absent (heart_ep)
 };
 LeftHeartEp left_heart_ep(const config::Scenario& scenario, const geometry::TriMesh& lv,
                           const geometry::TriMesh& la);
+// The same for a heart that may lack one chamber (an imported LV alone or LA alone): a null
+// body is left out, the other chamber becomes domain 0 (lv_domain / la_domain say which); at
+// least one body must be given (InputError otherwise). left_heart_ep(s, lv, la) is
+// heart_ep(s, &lv, &la).
+LeftHeartEp heart_ep(const config::Scenario& scenario, const geometry::TriMesh* lv, const geometry::TriMesh* la);
+
+// Loads electro.mesh_manifest (geometry::load_manifest) for scene "electro", mesh = "manifest".
+// The path is read on the solver's machine; a relative path resolves against the solver's
+// working directory, the files the manifest names against the manifest's folder. InputError
+// naming electro.mesh_manifest when the file does not exist, is not a regular file, cannot be
+// read or parsed, or has no body named "lv" or "la" (the names geometry::kLvBody / kLaBody).
+std::vector<geometry::TriMesh> load_electro_manifest(const std::string& path);
 
 }  // namespace systole::scene

@@ -2,6 +2,7 @@
 // One uncompressed HDF5 dataset, 1-D (cols = 1) or rows × cols, written in one call: the nodal
 // fields the scenes' XDMF files point at. Throws std::runtime_error naming `owner` and the dataset.
 #include <hdf5.h>
+#include <mpi.h>
 
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,17 @@ inline void write_h5_dataset(hid_t file, const std::string& name, hid_t type, co
   if (set >= 0) H5Dclose(set);
   H5Sclose(space);
   if (!ok) throw std::runtime_error(std::string(owner) + ": cannot write HDF5 dataset " + name);
+}
+
+// True on MPI rank 0 of MPI_COMM_WORLD, or when MPI is not initialised: the rank that writes a
+// scene's serial output files (every rank runs the same serial solve).
+inline bool is_rank_zero() {
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) return true;
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank == 0;
 }
 
 }  // namespace systole::scene

@@ -12,6 +12,7 @@
 #include "solver/fluid/fluid.h"
 #include "solver/ibm/forcing.h"
 #include "solver/ibm/loads.h"
+#include "solver/ibm/plane_forcing.h"
 #include "solver/ibm/shapes.h"
 
 namespace systole::scene {
@@ -75,6 +76,7 @@ void check_spec(const IbmCaseSpec& s) {
   if (!(s.end_time > 0 && s.end_time <= 1e4)) bad("end_time", s.end_time, "(0, 1e4]");
   if (!(s.frequency > 0)) bad("frequency", s.frequency, "(0, inf)");
   if (!(s.amplitude > 0 && s.amplitude <= 0.5)) bad("amplitude", s.amplitude, "(0, 0.5] diameters");
+  if (!(s.retraction_cells >= 0 && s.retraction_cells <= 1)) bad("retraction_cells", s.retraction_cells, "[0, 1]");
   if (!(s.womersley_number > 0 && s.womersley_number <= 15)) bad("womersley_number", s.womersley_number, "(0, 15]");
   if (s.samples < 1) bad("samples", s.samples, "[1, inf)");
 }
@@ -86,15 +88,16 @@ const char* to_string(IbmCase c) {
     case IbmCase::fixed_sphere: return "fixed_sphere";
     case IbmCase::oscillating_sphere: return "oscillating_sphere";
     case IbmCase::womersley_pipe: return "womersley_pipe";
+    case IbmCase::orifice_plate: return "orifice_plate";
   }
   return "?";
 }
 
 IbmCase parse_ibm_case(const std::string& name) {
-  for (IbmCase c : {IbmCase::fixed_sphere, IbmCase::oscillating_sphere, IbmCase::womersley_pipe})
+  for (IbmCase c : {IbmCase::fixed_sphere, IbmCase::oscillating_sphere, IbmCase::womersley_pipe, IbmCase::orifice_plate})
     if (name == to_string(c)) return c;
   throw InputError("ibm.verification_case = '" + name +
-                   "' is unknown; known: fixed_sphere, oscillating_sphere, womersley_pipe");
+                   "' is unknown; known: fixed_sphere, oscillating_sphere, womersley_pipe, orifice_plate");
 }
 
 RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale_s,
@@ -102,11 +105,12 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
                        const std::function<bool()>& cancel) {
   check_spec(spec);
   const auto start = Clock::now();
-  const bool sphere = spec.case_name != IbmCase::womersley_pipe;
+  const bool orifice = spec.case_name == IbmCase::orifice_plate;
+  const bool sphere = spec.case_name == IbmCase::fixed_sphere || spec.case_name == IbmCase::oscillating_sphere;
   const double h = 1.0 / spec.diameter_cells;
   // ---- grid (cubic cells of side h) ----
   grid::BoxSpec box;
-  if (sphere) {
+  if (sphere || orifice) {
     box.nx = box.ny = box.nz = static_cast<int>(std::lround(spec.box_diameters * spec.diameter_cells));
     if (spec.case_name == IbmCase::fixed_sphere)
       box.nx = static_cast<int>(std::lround(spec.box_length_diameters * spec.diameter_cells));
@@ -123,7 +127,7 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   fp.reynolds = spec.reynolds;
   fp.cfl = spec.cfl;
   fp.max_dt = spec.max_dt;
-  fp.bottom_wall.kind = fp.top_wall.kind = fluid::WallKind::free_slip;  // (ours) see header
+  fp.bottom_wall.kind = fp.top_wall.kind = orifice ? fluid::WallKind::no_slip : fluid::WallKind::free_slip;  // (ours)
   fp.time_scale_s = time_scale_s;
   fluid::FluidSolver fluid(slabs, fp);
 
@@ -131,6 +135,7 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   ibm::Markers markers(g);
   ibm::BodyOptions bo;
   bo.mm_per_unit = 1.0;  // meshes below are built in grid units
+  bo.retraction_cells = spec.retraction_cells;
   Vec3 centre(box.lx / 2, box.ly / 2, box.lz / 2);
   // fixed_sphere: the fringe (x ∈ [0, w]) feeds the uniform stream; the sphere sits 2.5 D
   // downstream of it (ours), leaving box_length − w − 2.5 D for the wake.
@@ -138,7 +143,9 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   if (spec.case_name == IbmCase::fixed_sphere) centre.x() = fringe_width + 2.5;
   double omega = 2 * kPi * spec.frequency;
   std::unique_ptr<WomersleyPipe> pipe;
-  int body = 0;
+  int body = 0, cover_body = -1;
+  std::unique_ptr<ibm::PlaneForcing> plate_eq4, cover_eq4;  // orifice_plate by eq 4
+  double drive_density = 0;                                  // orifice_plate: G
   if (sphere) {
     bo.normals = ibm::ExpectedNormals::outward;
     // Tiling level 1: the icosphere is already sized for tile edges ≈ 0.7 h (D/h = 10: mean
@@ -146,6 +153,35 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
     // went to level 2, 4× the markers (≈ 16 per h²) for the same drag (C_D 1.3462 vs 1.3479).
     bo.tiling_level = 1;
     body = markers.add_body(ibm::sphere_mesh(centre, 0.5, sphere_subdivisions(0.5, h)), "sphere", bo);
+  } else if (orifice) {
+    // The plate (two-sided: blood on both faces, no retraction of its faces) with the hole's rim
+    // moved out by r_d h (the retraction applied to the edge), and the cover filling the hole.
+    bo.normals = ibm::ExpectedNormals::unchecked;
+    bo.sides = ibm::Sides::two;
+    bo.retraction_cells = 0;
+    const double hole = 0.5 + spec.retraction_cells * h;
+    const double z_margin = h * (1 + 1e-9);  // the nodes must stay >= Δz off the walls (round-off)
+    // Quads of side ≤ 0.7 h (diagonals ≤ 0.99 h < h), tiling level 1: ≈ 4 markers per h².
+    const int qy = static_cast<int>(std::ceil(box.ly / (0.7 * h)));
+    const int qz = static_cast<int>(std::ceil((box.lz - 2 * z_margin) / (0.7 * h)));
+    bo.tiling_level = 1;
+    for (ibm::PlatePart part : {ibm::PlatePart::plate, ibm::PlatePart::cover}) {
+      const int id = markers.add_body(ibm::perforated_plate_x_mesh(box.lx / 2, 0, box.ly, z_margin, box.lz - 2 * z_margin,
+                                                                   centre.y(), centre.z(), hole, qy, qz, part),
+                                      part == ibm::PlatePart::plate ? "orifice plate" : "orifice cover", bo);
+      (part == ibm::PlatePart::plate ? body : cover_body) = id;
+    }
+    markers.set_active(cover_body, false);
+    if (spec.first_node_plane) {  // eq 4 instead: the markers stay off (kept for the CSV)
+      markers.set_active(body, false);
+      const double yc = centre.y(), zc = centre.z();
+      plate_eq4 = std::make_unique<ibm::PlaneForcing>(
+          slabs, ibm::RigidPlane{0, box.lx / 2, [=](double y, double z) { return std::hypot(y - yc, z - zc) >= 0.5; }});
+      cover_eq4 = std::make_unique<ibm::PlaneForcing>(
+          slabs, ibm::RigidPlane{0, box.lx / 2, [=](double y, double z) { return std::hypot(y - yc, z - zc) < 0.5; }});
+      cover_eq4->set_active(false);
+    }
+    drive_density = 6 * kPi / (box.lx * spec.reynolds);
   } else {
     bo.normals = ibm::ExpectedNormals::unchecked;  // an open tube
     // Quads of side ≤ 0.7h/√2: the diagonals meet the 0.7h tile target at tiling level 1.
@@ -160,6 +196,7 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   const double body_volume = sphere ? ibm::signed_volume(markers.bodies()[body].tiled) : 0.0;
   ibm::ForcingParameters fpar;
   fpar.iterations = spec.forcing_iterations;
+  fpar.carry_over = spec.carry_over_force;
   ibm::DirectForcing forcing(slabs, markers, fpar);
 
   // ---- prescribed motion (oscillating sphere): x_c = x₀ + A(1 − cos ωt) ----
@@ -191,9 +228,15 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
       forcing.markers_moved();
     }
     Vec3 drive = Vec3::Zero();
-    if (!sphere) drive = Vec3(std::cos(omega * (c.time + 0.5 * c.dt)), 0, 0);
+    if (spec.case_name == IbmCase::womersley_pipe) drive = Vec3(std::cos(omega * (c.time + 0.5 * c.dt)), 0, 0);
+    if (orifice) drive = Vec3(drive_density, 0, 0);
     const ibm::ForcingReport& r =
         forcing.apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, sphere ? uniform : drive);
+    Vec3 eq4_force = Vec3::Zero();
+    if (plate_eq4) {
+      eq4_force += plate_eq4->apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, drive);
+      eq4_force += cover_eq4->apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, drive);
+    }
     if (spec.case_name == IbmCase::oscillating_sphere) {
       // g = −F_IB / V: the box-mean momentum is unchanged by the step's forcing (ours).
       drive = Vec3(-r.total_force.x() / v_x, -r.total_force.y() / v_x, -r.total_force.z() / v_z);
@@ -228,7 +271,7 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
     }
     // Force on the body (Uhlmann 2005): −Σ F_b ΔV_b + d/dt ∫_body u dV (rigid: V_s a).
     const double a1 = spec.case_name == IbmCase::oscillating_sphere ? body_acceleration(t1) : 0.0;
-    body_force_total = -r.total_force + Vec3(body_volume * a1, 0, 0);
+    body_force_total = -r.total_force - eq4_force + Vec3(body_volume * a1, 0, 0);
     impulse += body_force_total * c.dt;
     impulse_time += c.dt;
     if (spec.case_name == IbmCase::oscillating_sphere && c.time >= first_period * (1 - 1e-12)) {
@@ -254,7 +297,7 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
 
   double end_time = spec.end_time;
   int periods = 0;
-  if (spec.case_name != IbmCase::fixed_sphere) {
+  if (spec.case_name == IbmCase::oscillating_sphere || spec.case_name == IbmCase::womersley_pipe) {
     const double period = 2 * kPi / omega;
     periods = std::max(spec.case_name == IbmCase::oscillating_sphere ? 2 : 1,
                        static_cast<int>(std::ceil(spec.end_time / period - 1e-9)));
@@ -301,6 +344,20 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
     }
   };
   std::vector<double> drag_loads_samples;
+  // orifice_plate: the volume flux through the duct (the same through every x-plane: periodic
+  // in x, divergence-free), measured on the x-faces i = 0.
+  Series flow_series{"flow_rate", "U D^2", {}};
+  auto flow_rate = [&]() {
+    const auto& u = fluid.velocity().u;
+    double q = 0;
+    for (int k = 0; k < u.k_count(); ++k)
+      for (int j = 0; j < g.ny(); ++j) q += u(0, j, k);
+    q *= g.dy() * g.dz();
+    double out = 0;
+    MPI_Allreduce(&q, &out, 1, MPI_DOUBLE, MPI_SUM, comm);
+    return out;
+  };
+  double flow_open = 0, plate_force_open = 0, switch_time = -1;
   for (int s = 1; s <= spec.samples; ++s) {
     const double t_sample = end_time * s / spec.samples;
     while (fluid.time() < t_sample * (1 - 1e-14) - 1e-300) {
@@ -324,6 +381,22 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
       drag_loads_samples.push_back(loads_force.x() / (0.125 * kPi));
     }
     if (pipe) pipe_error = std::max(pipe_error, pipe_error_now());
+    if (orifice) {
+      flow_series.values.push_back(flow_rate());
+      if (switch_time < 0 && fluid.time() >= 0.5 * end_time * (1 - 1e-12)) {
+        // Close the opening (the seed's vein ostia, MODEL.md §2): the cover's markers (or its
+        // eq 4 plane) switch on for the second half of the run.
+        flow_open = flow_series.values.back();
+        plate_force_open = mean_force.x();
+        switch_time = fluid.time();
+        if (cover_eq4) {
+          cover_eq4->set_active(true);
+        } else {
+          markers.set_active(cover_body, true);
+          forcing.markers_moved();
+        }
+      }
+    }
     if (progress) {
       ProgressReport rep;
       rep.simulated_time_s = fluid.time() * time_scale_s;
@@ -392,6 +465,16 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
     M["stokes_layer_thickness"] = delta;
     M["periods"] = periods;
     M["volume_fraction"] = (kPi / 6) / (g.lx() * g.ly() * g.lz());
+  } else if (orifice) {
+    const double closed = flow_series.values.empty() ? 0.0 : flow_series.values.back();
+    M["flow_rate_open"] = flow_open;
+    M["flow_rate_closed"] = closed;
+    M["closed_to_open_flow_ratio"] = flow_open != 0 ? closed / flow_open : 0.0;
+    M["hole_mean_velocity_open"] = flow_open / (kPi / 4);
+    M["plate_force_x_open"] = plate_force_open;
+    M["cover_switch_time"] = switch_time;
+    M["driving_force_density"] = drive_density;
+    M["first_node_plane"] = spec.first_node_plane ? 1 : 0;
   } else {
     M["error_linf_relative"] = pipe_error / pipe->peak();
     M["reference_peak_velocity"] = pipe->peak();
@@ -419,6 +502,7 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   }
   for (const std::string& w : markers.warnings()) result.notes.push_back(w);
   result.series = {std::move(ts), std::move(fx), std::move(fy), std::move(fz), std::move(slip_series)};
+  if (orifice) result.series.push_back(std::move(flow_series));
   return result;
 }
 
@@ -439,6 +523,9 @@ RunResult run_ibm(const config::Scenario& scenario, RunControl& control) {
   spec.womersley_number = c.womersley_number;
   spec.forcing_iterations = c.forcing_iterations;
   spec.cfl = c.cfl;
+  spec.retraction_cells = c.marker_retraction_cells;
+  spec.carry_over_force = c.forcing_carry_over;
+  spec.first_node_plane = c.valvular_plane_method == "first_node";
   spec.samples = 50;
   if (c.write_fields) spec.output_dir = control.output_directory();
   RunResult result = run_ibm_case(

@@ -25,6 +25,18 @@
 //                       solution inside the tube (Womersley 1955 J. Physiol. 127:553) and runs
 //                       whole periods; error = max |u − u_exact| over faces inside the tube over
 //                       the samples, relative to the analytic peak.
+//   orifice_plate:      the rigid valvular plane with one opening (MODEL.md §4): a plate across
+//                       a duct L × L × L (periodic in x and y, no-slip walls at z = 0, L), in the
+//                       plane x = L/2, with a circular hole of diameter 1 at its centre, driven
+//                       by a uniform f_x = G, G = 6π/(L Re) (ours: the pressure jump G L would
+//                       give a mean hole velocity 1 in Sampson's Stokes flow through a hole,
+//                       Q = Δp a³/(3μ); Sampson 1891 Phil. Trans. R. Soc. A 182:449). The plate
+//                       is MLS markers (spanning z ∈ [h, L − h]; the hole's rim retracted into
+//                       the plate by r_d h when retraction_cells > 0) or the seed's eq 4
+//                       (first_node_plane, solver/ibm/plane_forcing.h, spanning the whole
+//                       section). At the first sample at or after end_time/2 the hole's cover
+//                       (its own marker set, or its own eq 4 plane) is switched on: the flow rate
+//                       through the duct must drop to the leak.
 #include <mpi.h>
 
 #include <filesystem>
@@ -37,7 +49,7 @@
 
 namespace systole::scene {
 
-enum class IbmCase { fixed_sphere, oscillating_sphere, womersley_pipe };
+enum class IbmCase { fixed_sphere, oscillating_sphere, womersley_pipe, orifice_plate };
 const char* to_string(IbmCase c);
 // Throws InputError "ibm.verification_case = 'x' is unknown; known: ...".
 IbmCase parse_ibm_case(const std::string& name);
@@ -52,6 +64,9 @@ struct IbmCaseSpec {
   double cfl = 0.2;
   double max_dt = 0.02;
   int forcing_iterations = 1;    // multi-direct forcing passes (1 = the seed)
+  double retraction_cells = 0;   // r_d: markers retracted into the body by r_d h (Breugem 2012)
+  bool first_node_plane = false; // orifice_plate: the plate by eq 4 instead of MLS markers
+  bool carry_over_force = false; // ForcingParameters::carry_over (forcing.h)
   double frequency = 1;          // oscillating_sphere: cycles per time unit
   double amplitude = 0.01;       // oscillating_sphere: A in diameters
   double womersley_number = 4;   // womersley_pipe
@@ -70,6 +85,9 @@ struct IbmCaseSpec {
 // oscillating_sphere: added_mass_coefficient, added_mass_coefficient_stokes (the reference),
 //   added_mass_relative_error, stokes_layer_thickness.
 // womersley_pipe: error_linf_relative, reference_peak_velocity, periods.
+// orifice_plate: flow_rate_open (Q through the duct when the cover switches on), flow_rate_closed
+//   (at the end), closed_to_open_flow_ratio, hole_mean_velocity_open (Q/(π/4)),
+//   plate_force_x_open (on the plate), cover_switch_time, driving_force_density; series flow_rate.
 // series: time_s (time units × time_scale_s), force_x, force_y, force_z (on the body; each the
 // impulse mean ∫F dt/∫dt over the interval since the previous sample, also for the drag), slip_rms.
 RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale_s = 1.0,

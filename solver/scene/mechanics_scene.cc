@@ -16,6 +16,7 @@
 #include "solver/core/units.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/geometry/topology.h"
+#include "solver/structure/contact.h"
 #include "solver/structure/shapes.h"
 #include "solver/structure/shell.h"
 
@@ -25,13 +26,19 @@ namespace {
 using structure::ShellModel;
 using structure::Vec3;
 
-struct Body {
-  std::unique_ptr<ShellModel> model;
-  double volume0_mm3 = 0;
+using structure::BodyGroup;
+
+// The bodies of the scenario's structure.body, with their options, as one group advanced in
+// lockstep with contact between its bodies (when there are several and structure.contact).
+struct Bodies {
+  std::unique_ptr<BodyGroup> group;
+  std::vector<double> volume0_mm3;
+  std::size_t size() const { return group->body_count(); }
+  const ShellModel& operator[](std::size_t k) const { return group->body(k); }
+  ShellModel& operator[](std::size_t k) { return group->body(k); }
 };
 
-// The bodies of the scenario's structure.body, with their options.
-std::vector<Body> build_bodies(const config::Scenario& s) {
+Bodies build_bodies(const config::Scenario& s) {
   const config::Structure& st = s.structure;
   structure::ShellOptions opt;
   opt.law = st.law;
@@ -40,11 +47,11 @@ std::vector<Body> build_bodies(const config::Scenario& s) {
   opt.time_step_safety = st.time_step_safety;
   opt.strain_limit = st.strain_limit;
   const structure::ShellMaterials mat = structure::materials_from_config(s.tissue);
-  std::vector<Body> bodies;
+  std::vector<ShellModel> models;
   if (st.body == "sphere") {
     auto mesh = structure::icosphere(st.sphere_radius_mm, st.sphere_refinement, st.shell_thickness_mm,
                                      geometry::Tissue::kLvMyocardium, true);
-    bodies.push_back({std::make_unique<ShellModel>(mesh, mat, opt)});
+    models.emplace_back(mesh, mat, opt);
   } else if (st.body == "sheet") {
     const int nx = std::max(3, static_cast<int>(std::lround(st.sheet_size_mm / st.sheet_edge_mm)) + 1);
     const int ny = std::max(3, static_cast<int>(std::lround(st.sheet_size_mm / (st.sheet_edge_mm * std::sqrt(3.0) / 2))) + 1);
@@ -54,14 +61,30 @@ std::vector<Body> build_bodies(const config::Scenario& s) {
     const geometry::EdgeTopology topo(mesh);
     for (const auto& loop : geometry::boundary_loops(mesh, topo))
       for (auto i : loop) mesh.region[i] |= geometry::kAnchor;
-    bodies.push_back({std::make_unique<ShellModel>(mesh, mat, opt)});
-  } else {  // left_heart (LV + LA) or lv
+    models.emplace_back(mesh, mat, opt);
+  } else {  // left_heart (LV + LA), lv, mitral_leaflets
     const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
     opt.cavity_plane_z_mm = heart.plane.z_mm;
-    bodies.push_back({std::make_unique<ShellModel>(heart.body(geometry::kLvBody), mat, opt)});
-    if (st.body == "left_heart") bodies.push_back({std::make_unique<ShellModel>(heart.body(geometry::kLaBody), mat, opt)});
+    if (st.body == "mitral_leaflets") {
+      // Anchored at the annulus (the geometry tags it); the LV is on the +z side of the plane.
+      for (auto name : {geometry::kMitralAnteriorBody, geometry::kMitralPosteriorBody}) {
+        models.emplace_back(heart.body(name), mat, opt);
+        if (st.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), st.mitral_limit_mm);
+      }
+    } else {
+      models.emplace_back(heart.body(geometry::kLvBody), mat, opt);
+      if (st.body == "left_heart") models.emplace_back(heart.body(geometry::kLaBody), mat, opt);
+    }
   }
-  for (auto& b : bodies) b.volume0_mm3 = b.model->cavity_volume_mm3();
+  structure::ContactOptions copt;
+  copt.enabled = st.contact;
+  copt.rule = st.contact_rule == "cell_average" ? structure::ContactRule::kCellAverage : structure::ContactRule::kPenalty;
+  copt.distance_mm = st.contact_distance_mm;
+  copt.stiffness_kpa_per_mm = st.contact_stiffness_kpa_per_mm;
+  copt.skin_mm = 0.5 * st.contact_distance_mm;
+  Bodies bodies;
+  bodies.group = std::make_unique<BodyGroup>(std::move(models), copt);
+  for (std::size_t k = 0; k < bodies.size(); ++k) bodies.volume0_mm3.push_back(bodies[k].cavity_volume_mm3());
   return bodies;
 }
 
@@ -84,17 +107,17 @@ void h5_write(hid_t file, const std::string& name, hid_t type, const void* data,
 
 class PositionWriter {
  public:
-  PositionWriter(const std::filesystem::path& dir, const std::vector<Body>& bodies) : dir_(dir) {
+  PositionWriter(const std::filesystem::path& dir, const Bodies& bodies) : dir_(dir) {
     std::filesystem::create_directories(dir);
     file_ = H5Fcreate((dir / "structure.h5").string().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (file_ < 0) throw std::runtime_error("mechanics: cannot create " + (dir / "structure.h5").string());
     H5Gclose(H5Gcreate2(file_, "mesh", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     H5Gclose(H5Gcreate2(file_, "steps", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    for (const auto& b : bodies) {
-      const auto& m = b.model->stress_free_mesh();
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const auto& m = bodies[k].stress_free_mesh();
       std::vector<std::int32_t> tri;
       for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
-      h5_write(file_, "mesh/" + b.model->name() + "_triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3);
+      h5_write(file_, "mesh/" + bodies[k].name() + "_triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3);
     }
   }
   ~PositionWriter() {
@@ -103,31 +126,31 @@ class PositionWriter {
   PositionWriter(const PositionWriter&) = delete;
   PositionWriter& operator=(const PositionWriter&) = delete;
 
-  void write(const std::vector<Body>& bodies, double time_ms) {
+  void write(const Bodies& bodies, double time_ms) {
     const std::string step = "steps/" + std::to_string(times_.size());
     H5Gclose(H5Gcreate2(file_, step.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    for (const auto& b : bodies) {
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const ShellModel& b = bodies[k];
       std::vector<double> xyz;
-      for (const auto& p : b.model->positions_mm()) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
-      const auto strain = node_strain(*b.model);
-      h5_write(file_, step + "/" + b.model->name() + "_positions_mm", H5T_NATIVE_DOUBLE, xyz.data(),
-               b.model->node_count(), 3);
-      h5_write(file_, step + "/" + b.model->name() + "_strain", H5T_NATIVE_DOUBLE, strain.data(), b.model->node_count(), 1);
+      for (const auto& p : b.positions_mm()) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+      const auto strain = node_strain(b);
+      h5_write(file_, step + "/" + b.name() + "_positions_mm", H5T_NATIVE_DOUBLE, xyz.data(), b.node_count(), 3);
+      h5_write(file_, step + "/" + b.name() + "_strain", H5T_NATIVE_DOUBLE, strain.data(), b.node_count(), 1);
     }
     times_.push_back(time_ms);
   }
 
   // The XDMF index (a temporal collection of per-body grids), written once at the end.
-  void finish(const std::vector<Body>& bodies) {
+  void finish(const Bodies& bodies) {
     std::ofstream x(dir_ / "structure.xmf");
     x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
       << "  <Grid Name=\"structure\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     for (std::size_t k = 0; k < times_.size(); ++k) {
       x << "   <Grid Name=\"step" << k << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
         << "    <Time Value=\"" << times_[k] << "\"/>\n";
-      for (const auto& b : bodies) {
-        const std::string n = b.model->name();
-        const auto nt = b.model->stress_free_mesh().triangle_count(), nn = b.model->node_count();
+      for (std::size_t b = 0; b < bodies.size(); ++b) {
+        const std::string n = bodies[b].name();
+        const auto nt = bodies[b].stress_free_mesh().triangle_count(), nn = bodies[b].node_count();
         x << "    <Grid Name=\"" << n << "\" GridType=\"Uniform\">\n"
           << "     <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << nt << "\">\n"
           << "      <DataItem Dimensions=\"" << nt << " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">structure.h5:/mesh/"
@@ -150,15 +173,6 @@ class PositionWriter {
   std::vector<double> times_;
 };
 
-bool is_rank_zero() {
-  int ready = 0;
-  MPI_Initialized(&ready);
-  if (!ready) return true;
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank == 0;
-}
-
 double mean_abs_strain(const ShellModel& m) {
   const auto eps = m.edge_strains();
   double s = 0;
@@ -173,21 +187,24 @@ const std::vector<std::string>& mechanics_metric_names() {
       "volume_initial_ml", "volume_final_ml", "volume_change_percent", "max_strain", "mean_strain",
       "kinetic_energy_final_uj", "elastic_energy_final_uj", "bending_energy_final_uj", "stable_step_initial_ms",
       "stable_step_final_ms", "substeps", "nodes", "node_substeps_per_s", "end_time_ms", "positions_written",
-      "wall_time_s"};
+      "contact_pairs_final", "contact_pairs_max", "contact_crossed_max", "contact_min_gap_mm", "wall_time_s"};
   return names;
 }
 
 RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
   const config::Structure& st = scenario.structure;
   const auto start = std::chrono::steady_clock::now();
-  std::vector<Body> bodies = build_bodies(scenario);
+  Bodies bodies = build_bodies(scenario);
+  BodyGroup& group = *bodies.group;
   const double p_full_kpa = st.cavity_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+  // Mitral leaflets: normals towards the LA, so the LV-minus-LA pressure enters with a minus.
+  const double p_sign = st.body == "mitral_leaflets" ? -1.0 : 1.0;
   auto ramp = [&](double t_ms) { return st.pressure_ramp_ms > 0 ? std::min(1.0, t_ms / st.pressure_ramp_ms) : 1.0; };
   auto set_loads = [&](double t_ms) {
-    for (auto& b : bodies) {
-      b.model->set_cavity_pressure(p_full_kpa * ramp(t_ms));
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      bodies[k].set_cavity_pressure(p_sign * p_full_kpa * ramp(t_ms));
       if (st.active_tension_kpa > 0)
-        b.model->set_active_tension(std::vector<double>(b.model->node_count(), st.active_tension_kpa * ramp(t_ms)));
+        bodies[k].set_active_tension(std::vector<double>(bodies[k].node_count(), st.active_tension_kpa * ramp(t_ms)));
     }
   };
 
@@ -198,18 +215,21 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
 
   RunResult result;
   std::vector<Series> series{{"time_s", "s", {}}, {"pressure_mmhg", "mmHg", {}}};
-  for (const auto& b : bodies) series.push_back({b.model->name() + "_volume_ml", "ml", {}});
+  for (std::size_t k = 0; k < bodies.size(); ++k) series.push_back({bodies[k].name() + "_volume_ml", "ml", {}});
   const std::size_t first_extra = series.size();
   series.push_back({"max_strain", "", {}});
   series.push_back({"kinetic_energy_uj", "uJ", {}});
   series.push_back({"elastic_energy_uj", "uJ", {}});
   series.push_back({"bending_energy_uj", "uJ", {}});
+  series.push_back({"contact_pairs", "", {}});
+  int contact_max = 0, crossed_max = 0;
+  double min_gap = st.contact_distance_mm;
   auto sample = [&](double t_ms) {
     series[0].values.push_back(t_ms * 1e-3);
     series[1].values.push_back(st.cavity_pressure_mmhg * ramp(t_ms));
     double strain = 0, ke = 0, el = 0, be = 0;
     for (std::size_t k = 0; k < bodies.size(); ++k) {
-      const ShellModel& m = *bodies[k].model;
+      const ShellModel& m = bodies[k];
       series[2 + k].values.push_back(m.cavity_volume_mm3() * 1e-3);
       strain = std::max(strain, m.max_abs_strain());
       const auto e = m.energies();
@@ -217,18 +237,24 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
       el += e.elastic_uj;
       be += e.bending_uj;
     }
+    const auto& cs = group.contact_stats();
     series[first_extra].values.push_back(strain);
     series[first_extra + 1].values.push_back(ke);
     series[first_extra + 2].values.push_back(el);
     series[first_extra + 3].values.push_back(be);
+    series[first_extra + 4].values.push_back(cs.active);
+    contact_max = std::max(contact_max, cs.active);
+    crossed_max = std::max(crossed_max, cs.crossed);
+    if (cs.active > 0) min_gap = std::min(min_gap, cs.min_gap_mm);
     if (writer) writer->write(bodies, t_ms);
   };
 
-  double dt0 = 1e300;
-  for (const auto& b : bodies) dt0 = std::min(dt0, b.model->stable_step_ms());
+  const double dt0 = group.stable_step_ms();
   sample(0);
   const int steps = std::max(1, static_cast<int>(std::ceil(st.end_time_ms / st.output_interval_ms - 1e-9)));
-  long substeps = 0, node_substeps = 0;
+  long substeps = 0;
+  double nodes = 0;
+  for (std::size_t k = 0; k < bodies.size(); ++k) nodes += static_cast<double>(bodies[k].node_count());
   double t = 0;
   const auto loop_start = std::chrono::steady_clock::now();
   for (int k = 1; k <= steps; ++k) {
@@ -236,11 +262,7 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
     const double t_next = std::min(st.end_time_ms, k * st.output_interval_ms);
     // Loads held over the outer step at their value at its middle (ours).
     set_loads(0.5 * (t + t_next));
-    for (auto& b : bodies) {
-      const auto stats = b.model->advance(t_next - t);
-      substeps += stats.substeps;
-      node_substeps += static_cast<long>(stats.substeps) * static_cast<long>(b.model->node_count());
-    }
+    substeps += group.advance(t_next - t).substeps;
     t = t_next;
     sample(t);
     ProgressReport report;
@@ -259,34 +281,43 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
     result.notes.push_back("positions were requested but the caller gave no output directory: none written");
   }
 
-  const ShellModel& main = *bodies.front().model;
+  const ShellModel& main = bodies[0];
   const auto e = main.energies();
-  double dt_final = 1e300;
-  for (const auto& b : bodies) dt_final = std::min(dt_final, b.model->stable_step_ms());
   auto& m = result.metrics;
-  m["volume_initial_ml"] = bodies.front().volume0_mm3 * 1e-3;
+  m["volume_initial_ml"] = bodies.volume0_mm3.front() * 1e-3;
   m["volume_final_ml"] = main.cavity_volume_mm3() * 1e-3;
-  m["volume_change_percent"] = 100 * (main.cavity_volume_mm3() / bodies.front().volume0_mm3 - 1);
+  m["volume_change_percent"] = 100 * (main.cavity_volume_mm3() / bodies.volume0_mm3.front() - 1);
   m["max_strain"] = main.max_abs_strain();
   m["mean_strain"] = mean_abs_strain(main);
   m["kinetic_energy_final_uj"] = e.kinetic_uj;
   m["elastic_energy_final_uj"] = e.elastic_uj;
   m["bending_energy_final_uj"] = e.bending_uj;
   m["stable_step_initial_ms"] = dt0;
-  m["stable_step_final_ms"] = dt_final;
+  m["stable_step_final_ms"] = group.stable_step_ms();
   m["substeps"] = static_cast<double>(substeps);
-  double nodes = 0;
-  for (const auto& b : bodies) nodes += static_cast<double>(b.model->node_count());
   m["nodes"] = nodes;
-  m["node_substeps_per_s"] = loop_s > 0 ? static_cast<double>(node_substeps) / loop_s : 0;
+  m["node_substeps_per_s"] = loop_s > 0 ? static_cast<double>(substeps) * nodes / loop_s : 0;
   m["end_time_ms"] = t;
   m["positions_written"] = writer ? 1 : 0;
-  if (st.body == "left_heart" || st.body == "lv") {
-    for (const auto& b : bodies) {
-      m[b.model->name() + "_volume_initial_ml"] = b.volume0_mm3 * 1e-3;
-      m[b.model->name() + "_volume_final_ml"] = b.model->cavity_volume_mm3() * 1e-3;
-      m[b.model->name() + "_max_strain"] = b.model->max_abs_strain();
+  m["contact_pairs_final"] = group.contact_stats().active;
+  m["contact_pairs_max"] = contact_max;
+  m["contact_crossed_max"] = crossed_max;
+  m["contact_min_gap_mm"] = min_gap;
+  if (bodies.size() > 1 || st.body == "lv") {
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const ShellModel& b = bodies[k];
+      m[b.name() + "_volume_initial_ml"] = bodies.volume0_mm3[k] * 1e-3;
+      m[b.name() + "_volume_final_ml"] = b.cavity_volume_mm3() * 1e-3;
+      m[b.name() + "_max_strain"] = b.max_abs_strain();
     }
+  }
+  if (st.body == "mitral_leaflets") {
+    // Largest displacement of a leaflet node towards the LA (-z), to compare with the limiter.
+    double towards_la = 0;
+    for (std::size_t k = 0; k < bodies.size(); ++k)
+      for (std::size_t i = 0; i < bodies[k].node_count(); ++i)
+        towards_la = std::max(towards_la, bodies[k].stress_free_mesh().position_mm[i].z() - bodies[k].positions_mm()[i].z());
+    m["leaflet_displacement_towards_la_mm"] = towards_la;
   }
   if (scenario.outputs.time_series) result.series = std::move(series);
   m["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

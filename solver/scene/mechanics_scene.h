@@ -1,9 +1,12 @@
 #pragma once
 // Scene "mechanics": the structure alone (solver/structure), no fluid: a closed spherical
-// shell, a clamped square sheet, or the procedural heart's LV and LA anchored at the valvular
-// plane, under a prescribed cavity pressure and/or a uniform active fibre tension, both ramped
-// over structure.pressure_ramp_ms. Outputs: node positions per outer step (structure.h5 +
-// structure.xmf for ParaView), cavity volumes, strains, energies, metrics. See docs/structure.md.
+// shell, a clamped square sheet, the procedural heart's LV and LA anchored at the valvular
+// plane (or its LV alone), or its two mitral leaflets anchored at the annulus (pressure = LV
+// minus LA, closing them; the seed's limiter towards the LA), under a prescribed cavity
+// pressure and/or a uniform active fibre tension, both ramped over structure.pressure_ramp_ms.
+// The bodies advance in lockstep as a structure::BodyGroup with contact between them
+// (structure.contact). Outputs: node positions per outer step (structure.h5 + structure.xmf for
+// ParaView), cavity volumes, strains, energies, contact counts, metrics. See docs/structure.md.
 #include <string>
 #include <vector>
 
@@ -15,8 +18,9 @@ namespace systole::scene {
 
 RunResult run_mechanics(const config::Scenario& scenario, RunControl& control);
 
-// The metrics run_mechanics always reports (of the primary body: sphere, sheet or LV); the left
-// heart adds lv_* and la_* volume metrics.
+// The metrics run_mechanics always reports (of the primary body: sphere, sheet, LV or anterior
+// leaflet; contact_* over all bodies); several bodies or the LV add <body>_volume_*/_max_strain,
+// the mitral leaflets leaflet_displacement_towards_la_mm.
 const std::vector<std::string>& mechanics_metric_names();
 
 }  // namespace systole::scene

@@ -11,6 +11,7 @@
 #include "solver/fluid/verification_cases.h"
 #include "solver/lumped/simulate.h"
 #include "solver/scene/electro_scene.h"
+#include "solver/scene/electromechanics_scene.h"
 #include "solver/scene/ibm_scene.h"
 #include "solver/scene/mechanics_scene.h"
 #include "uq/ishigami.h"
@@ -129,6 +130,7 @@ const std::vector<std::string>& metric_names(const std::string& scene) {
   if (scene == "fluid") return fluid;
   if (scene == "electro") return electro_metric_names();
   if (scene == "mechanics") return mechanics_metric_names();
+  if (scene == "electromechanics") return electromechanics_metric_names();
   if (scene == "ibm") return ibm_metric_names();
   return none;
 }
@@ -148,6 +150,8 @@ RunResult run(const config::Scenario& scenario, RunControl& control) {
     result = run_mechanics(scenario, control);
   } else if (scenario.scene == "ibm") {
     result = run_ibm(scenario, control);
+  } else if (scenario.scene == "electromechanics") {
+    result = run_electromechanics(scenario, control);
   } else {
     // parse_scenario() already rejects unimplemented scenes; this guards direct callers.
     std::string list;

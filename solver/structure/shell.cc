@@ -237,7 +237,7 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
     h.o1 = opposite(first);
     h.o2 = opposite(second);
     const auto& p = mesh_.position_mm;
-    h.theta0 = hinge_angle(p[h.e0], p[h.e1], p[h.o1], p[h.o2]);
+    h.theta0 = options.flat_rest_angles ? 0.0 : hinge_angle(p[h.e0], p[h.e1], p[h.o1], p[h.o2]);
     h.cos0 = std::cos(h.theta0);
     h.sin0 = std::sin(h.theta0);
     const double nu = materials.poisson_ratio;
@@ -516,6 +516,11 @@ void ShellModel::compute_forces() {
     }
   }
   add_pressure_forces(x_, force_);
+  if (!contact_force_.empty())
+    for (std::size_t i = 0; i < nn; ++i) {
+      force_[i] += contact_force_[i];
+      row[i] += contact_row_[i];
+    }
   omega2_ = 0;
   for (std::size_t i = 0; i < nn; ++i)
     if (!fixed_[i]) omega2_ = std::max(omega2_, row[i] * inv_mass_[i]);
@@ -529,8 +534,13 @@ double ShellModel::stable_step_ms() const {
 }
 
 void ShellModel::substep(double dt) {
+  begin_substep(dt);
+  end_substep(dt);
+}
+
+void ShellModel::begin_substep(double dt) {
   const double h = 0.5 * dt;
-  const double damp_in = 1 - options_.damping_per_ms * h, damp_out = 1 / (1 + options_.damping_per_ms * h);
+  const double damp_in = 1 - options_.damping_per_ms * h;
   const std::size_t n = node_count();
   for (std::size_t i = 0; i < n; ++i) {
     if (!fixed_[i]) v_[i] = damp_in * v_[i] + (h * inv_mass_[i]) * force_[i];
@@ -547,6 +557,12 @@ void ShellModel::substep(double dt) {
     }
   }
   time_ms_ += dt;
+}
+
+void ShellModel::end_substep(double dt) {
+  const double h = 0.5 * dt;
+  const double damp_out = 1 / (1 + options_.damping_per_ms * h);
+  const std::size_t n = node_count();
   compute_forces();
   for (std::size_t i = 0; i < n; ++i)
     if (!fixed_[i]) v_[i] = damp_out * (v_[i] + (h * inv_mass_[i]) * force_[i]);
@@ -561,6 +577,76 @@ void ShellModel::substep(double dt) {
   }
 }
 
+void ShellModel::set_contact_loads(std::vector<Vec3> force_mn, std::vector<double> stiffness_mn_per_mm) {
+  if ((!force_mn.empty() && force_mn.size() != node_count()) || stiffness_mn_per_mm.size() != force_mn.size())
+    throw std::invalid_argument("set_contact_loads: wrong size for body '" + name_ + "'");
+  contact_force_ = std::move(force_mn);
+  contact_row_ = std::move(stiffness_mn_per_mm);
+}
+
+void ShellModel::begin_advance(double T_ms) {
+  // Fixed nodes move to their targets at constant velocity over T.
+  moving_fixed_ = false;
+  for (std::size_t i = 0; i < node_count(); ++i) {
+    if (!fixed_[i]) continue;
+    v_[i] = (fixed_target_[i] - x_[i]) / T_ms;
+    moving_fixed_ = moving_fixed_ || v_[i].squaredNorm() > 0;
+  }
+}
+
+void ShellModel::end_advance(double t_end_ms) {
+  time_ms_ = t_end_ms;
+  if (moving_fixed_)
+    for (std::size_t i = 0; i < node_count(); ++i)
+      if (fixed_[i]) {
+        x_[i] = fixed_target_[i];
+        v_[i].setZero();
+      }
+  moving_fixed_ = false;
+}
+
+void ShellModel::check_min_step() const {
+  const double dt_stable = stable_step_ms();
+  if (dt_stable >= options_.min_step_ms) return;
+  std::ostringstream what;
+  what << "the stable step collapsed to " << dt_stable << " ms (< min_step_ms " << options_.min_step_ms
+       << "); largest edge strain " << worst_strain_;
+  throw_instability(worst_edge_ >= 0 ? springs_[worst_edge_].i : 0, what.str());
+}
+
+double ShellModel::kinetic_energy_uj() const {
+  double ke = 0;
+  for (std::size_t i = 0; i < node_count(); ++i) ke += 0.5 * mass_[i] * v_[i].squaredNorm();
+  return ke;
+}
+
+void ShellModel::check_energy_growth(EnergyWatch& watch, double dt, double dt_stable) const {
+  const double ke = kinetic_energy_uj();
+  const bool grew = watch.kinetic_uj > 0 && ke > 1e3 * watch.kinetic_uj;
+  if (grew && watch.grew) {
+    const double pot = spring_energy(x_) + bending_energy(x_);
+    if (ke > pot) {
+      std::size_t worst = 0;
+      for (std::size_t i = 1; i < node_count(); ++i)
+        if (v_[i].squaredNorm() > v_[worst].squaredNorm()) worst = i;
+      std::ostringstream what;
+      what << "kinetic energy grew from " << watch.kinetic_uj << " to " << ke << " uJ in " << options_.restep_interval
+           << " substeps of " << dt << " ms, after growing > 1e3 times over the interval before (stable step estimate "
+           << dt_stable << " ms)";
+      throw_instability(static_cast<std::int32_t>(worst), what.str());
+    }
+  }
+  watch.kinetic_uj = ke;
+  watch.grew = grew;
+}
+
+std::vector<double> ShellModel::node_areas_mm2() const {
+  std::vector<double> a(node_count(), 0.0);
+  for (std::size_t t = 0; t < mesh_.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) a[mesh_.tri[t][k]] += mesh_.area_mm2(t) / 3;
+  return a;
+}
+
 void ShellModel::throw_instability(std::int32_t node, const std::string& what) const {
   std::ostringstream place;
   place << "body '" << name_ << "' node " << node << " (stress-free position " << mesh_.position_mm[node].transpose()
@@ -572,21 +658,14 @@ AdvanceStats ShellModel::advance(double T_ms) {
   AdvanceStats stats;
   if (!(T_ms > 0)) return stats;
   const double t_end = time_ms_ + T_ms;
-  // Fixed nodes move to their targets at constant velocity over T.
-  bool moving = false;
-  for (std::size_t i = 0; i < node_count(); ++i) {
-    if (!fixed_[i]) continue;
-    v_[i] = (fixed_target_[i] - x_[i]) / T_ms;
-    moving = moving || v_[i].squaredNorm() > 0;
-  }
+  begin_advance(T_ms);
   double remaining = T_ms;
   double dt_stable = stable_step_ms();
   long n = std::max(1L, static_cast<long>(std::ceil(remaining / dt_stable)));
   double dt = remaining / n;
   stats.smallest_dt_ms = dt;
   stats.largest_dt_ms = dt;
-  double ke_check = 0;
-  for (std::size_t i = 0; i < node_count(); ++i) ke_check += 0.5 * mass_[i] * v_[i].squaredNorm();
+  EnergyWatch watch{kinetic_energy_uj(), false};
   int since = 0;
   while (n > 0) {
     substep(dt);
@@ -597,12 +676,7 @@ AdvanceStats ShellModel::advance(double T_ms) {
     // The bound is refreshed by every force evaluation: re-plan the rest of the outer step as
     // soon as the current substep exceeds it (the Fung law stiffens).
     dt_stable = stable_step_ms();
-    if (dt_stable < options_.min_step_ms) {
-      std::ostringstream what;
-      what << "the stable step collapsed to " << dt_stable << " ms (< min_step_ms " << options_.min_step_ms
-           << "); largest edge strain " << worst_strain_;
-      throw_instability(worst_edge_ >= 0 ? springs_[worst_edge_].i : 0, what.str());
-    }
+    check_min_step();
     if (dt > dt_stable) {
       n = std::max(1L, static_cast<long>(std::ceil(remaining / dt_stable)));
       dt = remaining / n;
@@ -610,30 +684,9 @@ AdvanceStats ShellModel::advance(double T_ms) {
     }
     if (++since < options_.restep_interval) continue;
     since = 0;
-    // Energy growth: kinetic energy up by > 1e3 between checks while above the potential energy.
-    double ke = 0;
-    for (std::size_t i = 0; i < node_count(); ++i) ke += 0.5 * mass_[i] * v_[i].squaredNorm();
-    if (ke_check > 0 && ke > 1e3 * ke_check) {
-      const double pot = spring_energy(x_) + bending_energy(x_);
-      if (ke > pot) {
-        std::size_t worst = 0;
-        for (std::size_t i = 1; i < node_count(); ++i)
-          if (v_[i].squaredNorm() > v_[worst].squaredNorm()) worst = i;
-        std::ostringstream what;
-        what << "kinetic energy grew from " << ke_check << " to " << ke << " uJ in " << options_.restep_interval
-             << " substeps of " << dt << " ms (stable step estimate " << dt_stable << " ms)";
-        throw_instability(static_cast<std::int32_t>(worst), what.str());
-      }
-    }
-    ke_check = ke;
+    check_energy_growth(watch, dt, dt_stable);
   }
-  time_ms_ = t_end;
-  if (moving)
-    for (std::size_t i = 0; i < node_count(); ++i)
-      if (fixed_[i]) {
-        x_[i] = fixed_target_[i];
-        v_[i].setZero();
-      }
+  end_advance(t_end);
   return stats;
 }
 

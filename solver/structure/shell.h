@@ -65,6 +65,8 @@ struct ShellOptions {
   double cavity_plane_z_mm = 0;    // plane closing an open chamber for cavity_volume_mm3()
   double min_step_ms = 1e-4;       // a stable step below this (0.1 us, < the seed's 0.4 us) stops
                                    // the run with a diagnosis instead of crawling (ours)
+  bool flat_rest_angles = false;   // theta0 = 0 on every hinge instead of the stress-free mesh's
+                                   // (a shell that is flat at rest; verification, ours)
 };
 
 struct Energies {
@@ -136,6 +138,45 @@ class ShellModel {
   // One velocity-Verlet substep of dt ms (no stability planning; the same checks).
   void substep(double dt_ms);
 
+  // --- multi-body stepping (contact between bodies, solver/structure/contact.h) ---
+  // substep(dt) is begin_substep(dt) then end_substep(dt). Between the two the positions are
+  // those at the end of the substep, so forces that depend on other bodies can be set with
+  // set_contact_loads() and enter the force evaluation of end_substep().
+  void begin_substep(double dt_ms);  // half kick, drift, limiter, time += dt
+  void end_substep(double dt_ms);    // forces at the new positions, half kick, strain check
+  // Contact forces (mN, per node) and their stiffness (mN/mm, per node: the contribution to the
+  // Gershgorin row sum of the tangent stiffness, so the stable step includes it). Held until
+  // changed and added by every later force evaluation (end_substep, set_* or refresh_forces());
+  // empty vectors remove them.
+  void set_contact_loads(std::vector<Vec3> force_mn, std::vector<double> stiffness_mn_per_mm);
+  void refresh_forces() { compute_forces(); }
+  // Sets one free node's velocity (velocity-level constraints between bodies; fixed nodes keep
+  // theirs). Forces are unchanged (they depend on positions only).
+  void set_node_velocity(std::int32_t node, const Vec3& v_mm_per_ms) {
+    if (!fixed_.at(node)) v_[node] = v_mm_per_ms;
+  }
+  // advance(T)'s bracket for a caller that sub-cycles several bodies in lockstep: begin_advance
+  // gives the fixed nodes their velocity towards their targets over T; end_advance sets the
+  // clock to t_end and puts moved fixed nodes exactly on their targets.
+  void begin_advance(double T_ms);
+  void end_advance(double t_end_ms);
+  // The energy-growth check of advance(), called every restep_interval substeps: throws
+  // InstabilityError when the kinetic energy grew by > 1e3 since the previous check, had also
+  // grown by > 1e3 over the interval before (a motion starting from rest under a new load grows
+  // like t^2 and does not pass twice; an explicit instability grows geometrically), and exceeds
+  // the elastic + bending energy. Updates `watch`.
+  struct EnergyWatch {
+    double kinetic_uj = 0;
+    bool grew = false;
+  };
+  void check_energy_growth(EnergyWatch& watch, double dt_ms, double dt_stable_ms) const;
+  // Throws InstabilityError when stable_step_ms() < options().min_step_ms (as advance() does).
+  void check_min_step() const;
+  double kinetic_energy_uj() const;
+  const ShellOptions& options() const { return options_; }
+  // Lumped area of every node in the stress-free mesh (mm^2, 1/3 of its triangles').
+  std::vector<double> node_areas_mm2() const;
+
   // --- state ---
   const std::string& name() const { return name_; }
   std::size_t node_count() const { return x_.size(); }
@@ -150,6 +191,8 @@ class ShellModel {
   const SpringLaw& law() const { return *law_; }
   // Replaces positions and velocities (tests, restarts); recomputes the forces.
   void set_state(std::vector<Vec3> x_mm, std::vector<Vec3> v_mm_per_ms);
+  // Sets the clock (ms): with set_state, returns the body to a saved instant (strong coupling).
+  void set_time_ms(double t_ms) { time_ms_ = t_ms; }
 
   Energies energies() const;
   // Total force (mN) on every node at the current state (internal + active + loads), as used by
@@ -197,6 +240,9 @@ class ShellModel {
   std::vector<std::uint8_t> fixed_;
   std::vector<Vec3> x_, v_, force_, external_;
   std::vector<Vec3> fixed_target_;  // where fixed nodes should be at the end of the advance
+  std::vector<Vec3> contact_force_;    // set_contact_loads (empty: none)
+  std::vector<double> contact_row_;
+  bool moving_fixed_ = false;          // begin_advance found fixed nodes to move
   std::vector<double> row_;  // Gershgorin row sums of the tangent stiffness at x_ (compute_forces)
   std::vector<std::vector<Vec3>> thread_force_;  // per-thread buffers (threads > 1)
   std::vector<std::vector<double>> thread_row_;

@@ -61,7 +61,11 @@ TEST(SingleCell, RushLarsenIsExactForAFrozenGate) {
 
 // TTP06 at 1 Hz, 10 beats (the long pacing is in bench/electro; docs/electro.md lists how
 // much the biomarkers still move). The bands are physiological plausibility bands (ours), not
-// a reproduction of the paper's figures (which this session could not retrieve):
+// a reproduction of the paper's figures (which could not be retrieved). The one compilation of
+// human adult myocyte data found (PMC4635107 Table 1: APD 228-259 ms, amplitude 102-110 mV, Vmax
+// 254-303 V/s, rest ~-90 mV) disagrees with TTP06 (305 ms, 125 mV, 385 V/s, -85.5 mV): that is
+// tabulated and discussed in docs/electro.md and deliberately not asserted here (it would fail;
+// a tolerance picked to pass would be meaningless).
 // - rest -90..-80 mV, peak +20..+50 mV, dV/dt max 200..450 V/s: the ranges of human
 //   ventricular myocyte action potentials the model was built to match;
 // - APD90 epi/endo 250..350 ms: around the ~270 ms human tissue APD that ten Tusscher et al.
@@ -95,7 +99,7 @@ TEST(SingleCell, Ttp06PacedAt1HzHasPhysiologicalBiomarkers) {
 // (APD90 between 150 and 400 ms: the ventricular/atrial range they are scaled to represent),
 // rest at the declared resting potential.
 TEST(SingleCell, CheapModelsFireAndRecoverAt1Hz) {
-  for (const char* name : {"aliev_panfilov", "mitchell_schaeffer", "fhn"}) {
+  for (const char* name : {"aliev_panfilov", "mitchell_schaeffer", "fhn", "fhn_atrial"}) {
     SCOPED_TRACE(name);
     auto m = ionic::make_cell_model(name, 1);
     const auto b = pace_single_cell(name, {1000.0, 3, 0.05, 35.0, 2.0});
@@ -103,6 +107,54 @@ TEST(SingleCell, CheapModelsFireAndRecoverAt1Hz) {
     EXPECT_GT(b.peak_mv, m->resting_potential_mv() + 80.0);
     EXPECT_GT(b.apd90_ms, 150.0);
     EXPECT_LT(b.apd90_ms, 400.0);
+  }
+}
+
+// fhn_atrial (ours) is the Sundnes FHN with the Vm equation 30x faster and a slower recovery
+// (b = 0.006 /ms): same rest, a steeper upstroke, and an atrial APD90 in the 150-250 ms range
+// issue #4 asks for (the Sundnes set at this b would be ~190 ms too, but conducts at 0.13 m/s:
+// tissue_test.cc FhnAtrialConductsAtTheHumanAtrialVelocity).
+TEST(SingleCell, FhnAtrialHasAnAtrialActionPotential) {
+  const PacingProtocol pr{1000.0, 3, 0.01, 35.0, 2.0};
+  const auto base = pace_single_cell("fhn", pr), atrial = pace_single_cell("fhn_atrial", pr);
+  std::printf("fhn: dV/dt %.0f V/s, APD90 %.1f ms; fhn_atrial: dV/dt %.0f V/s, APD90 %.1f ms\n", base.dvdt_max_v_per_s,
+              base.apd90_ms, atrial.dvdt_max_v_per_s, atrial.apd90_ms);
+  EXPECT_NEAR(atrial.rest_mv, base.rest_mv, 0.1);
+  EXPECT_GT(atrial.dvdt_max_v_per_s, 3.0 * base.dvdt_max_v_per_s);
+  EXPECT_GT(atrial.apd90_ms, 150.0);
+  EXPECT_LT(atrial.apd90_ms, 250.0);
+}
+
+// Mitchell & Schaeffer 2003 (Bull Math Biol 65:767, their APD analysis) derive the AP duration
+// of their model to leading order in tau_in << tau_out << tau_open, tau_close: the excited state
+// exists while h > h_min = 4 tau_in / tau_out, and h decays as exp(-t / tau_close) during the AP,
+// so a beat from rest (h = 1) lasts APD_max = tau_close ln(1 / h_min) (= 241.4 ms by default).
+// Check (ours): the measured APD90 exceeds it by the slow passage through the fold of the fast
+// equation at h = h_min, which the leading order omits; with the Riccati normal form
+// y' = t / (2 tau_out tau_close) + 2 y^2 / tau_out of that fold (ours) the delay is
+// 2.338 (tau_out^2 tau_close)^(1/3) (2.338 = first zero of Ai(-t)), so
+//   - APD90 / APD_max - 1 -> 0 as tau_close^(-2/3): observed order asserted 0.6-0.75 (2/3);
+//   - APD90 within 2 % of APD_max + the delay at every tau_close.
+TEST(SingleCell, MitchellSchaefferApdMatchesThePublishedAsymptoticFormula) {
+  const double tau_in = 0.3, tau_out = 6.0, h_min = 4.0 * tau_in / tau_out;
+  const double tcs[3] = {150.0, 600.0, 2400.0};
+  double rel[3];
+  for (int k = 0; k < 3; ++k) {
+    const double apd_max = tcs[k] * std::log(1.0 / h_min);
+    const double delay = 2.3381 * std::cbrt(tau_out * tau_out * tcs[k]);
+    const auto b = pace_single_cell("mitchell_schaeffer", {apd_max + 300.0, 1, 0.02, 35.0, 2.0},
+                                    {{"tau_close", tcs[k]}});
+    rel[k] = b.apd90_ms / apd_max - 1.0;
+    std::printf("tau_close %.0f ms: APD90 %.2f ms, APD_max %.2f ms (rel. diff %.4f), + fold delay %.2f ms\n", tcs[k],
+                b.apd90_ms, apd_max, rel[k], apd_max + delay);
+    EXPECT_GT(rel[k], 0.0);
+    EXPECT_NEAR(b.apd90_ms / (apd_max + delay), 1.0, 0.02);
+  }
+  for (int k = 0; k < 2; ++k) {
+    const double p = std::log(rel[k] / rel[k + 1]) / std::log(4.0);
+    std::printf("observed order of APD90 / APD_max - 1 in tau_close: %.3f (theory 2/3)\n", p);
+    EXPECT_GT(p, 0.6);
+    EXPECT_LT(p, 0.75);
   }
 }
 

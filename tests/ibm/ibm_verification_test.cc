@@ -77,26 +77,75 @@ TEST(IbmSlip, MultiDirectForcingReducesSlip) {
 
 // Womersley flow in a tube of IB markers (Wo = 4, Re = 100), one period from the analytic
 // periodic state: the max error inside the tube converges at first order (the diffuse
-// interface), measured over every sample of the period.
+// interface), measured over every sample of the period. retraction: r_d of markers.h.
+double womersley_error(double diameter_cells, double retraction) {
+  IbmCaseSpec s;
+  s.case_name = IbmCase::womersley_pipe;
+  s.reynolds = 100;
+  s.womersley_number = 4;
+  s.diameter_cells = diameter_cells;
+  s.end_time = 1;  // one period
+  s.samples = 10;
+  s.retraction_cells = retraction;
+  return run_ibm_case(s, MPI_COMM_WORLD).metrics.at("error_linf_relative");
+}
+
 TEST(IbmWomersleyPipe, ConvergesAtFirstOrder) {
   double previous = 0;
   for (double dc : {10.0, 20.0}) {
-    IbmCaseSpec s;
-    s.case_name = IbmCase::womersley_pipe;
-    s.reynolds = 100;
-    s.womersley_number = 4;
-    s.diameter_cells = dc;
-    s.end_time = 1;  // one period
-    s.samples = 10;
-    const RunResult r = run_ibm_case(s, MPI_COMM_WORLD);
-    const double e = r.metrics.at("error_linf_relative");
-    print("womersley pipe D/h = " + std::to_string(static_cast<int>(dc)) + ": max error / peak", e);
+    const double e = womersley_error(dc, 0.0);
+    print("womersley pipe D/h = " + std::to_string(static_cast<int>(dc)) + ", markers on the wall: max error / peak", e);
     if (previous > 0) {
       const double order = std::log2(previous / e);
       print("  observed order", order);
       EXPECT_GE(order, 0.8);
     }
     previous = e;
+  }
+}
+
+// The same with the markers retracted by r_d = 0.5 h out of the lumen (markers.h; Breugem 2012).
+// r_d is not fitted to this flow: it is the offset of the diffuse MLS wall measured on the plane
+// channel (IbmRigidPlane.MlsAndEq4PlatesPoiseuilleWallOffsetAndEquivalence: 0.454, 0.476, 0.483 h).
+// Issue 7's goal, within 5 % of the analytic peak, is met at D/h = 20 (measured 0.042; 0.164
+// without the retraction), still converging at first order.
+TEST(IbmWomersleyPipe, RetractedMarkersWithinFivePercentAtTwentyCells) {
+  const double coarse = womersley_error(10, 0.5), fine = womersley_error(20, 0.5);
+  print("womersley pipe D/h = 10, r_d = 0.5: max error / peak", coarse);
+  print("womersley pipe D/h = 20, r_d = 0.5: max error / peak", fine);
+  print("  observed order", std::log2(coarse / fine));
+  EXPECT_GE(std::log2(coarse / fine), 0.8);
+  EXPECT_LT(fine, 0.05);
+}
+
+// The rigid valvular plane with one opening (scene case orifice_plate, D/h = 8, Re = 10, duct
+// 3 × 3 × 3): flow through the hole while it is open; at t = 2 the cover is switched on (the
+// seed's vein ostia, MODEL.md §2) and the flow through the duct must stop. Both plates: the
+// seed's eq 4 (plane_forcing.h) and MLS markers with the force carried over (forcing.h; with the
+// seed's single pass the MLS plate leaks under the pressure jump, docs/ibm.md).
+RunResult orifice(bool eq4) {
+  IbmCaseSpec s;
+  s.case_name = IbmCase::orifice_plate;
+  s.reynolds = 10;
+  s.diameter_cells = 8;
+  s.box_diameters = 3;
+  s.end_time = 4;
+  s.samples = 16;
+  s.first_node_plane = eq4;
+  s.carry_over_force = !eq4;
+  s.retraction_cells = eq4 ? 0.0 : 0.5;
+  return run_ibm_case(s, MPI_COMM_WORLD);
+}
+
+TEST(IbmOrifice, CoverSwitchedOnStopsTheFlowThroughTheHole) {
+  for (bool eq4 : {true, false}) {
+    const RunResult r = orifice(eq4);
+    const std::string name = eq4 ? "eq 4 plate" : "MLS plate (carry-over, rim r_d = 0.5)";
+    print(name + ": flow rate open (t = 2)", r.metrics.at("flow_rate_open"));
+    print(name + ": flow rate with the cover on (t = 4)", r.metrics.at("flow_rate_closed"));
+    print(name + ": closed / open", r.metrics.at("closed_to_open_flow_ratio"));
+    EXPECT_GT(r.metrics.at("flow_rate_open"), 0.3);  // measured 0.76 (eq 4), 0.51 (MLS)
+    EXPECT_LT(std::abs(r.metrics.at("closed_to_open_flow_ratio")), 0.01);  // measured 3e-4, 9e-5
   }
 }
 

@@ -11,6 +11,7 @@
 
 #include "solver/fluid/fluid.h"
 #include "solver/ibm/forcing.h"
+#include "solver/ibm/plane_forcing.h"
 #include "solver/ibm/shapes.h"
 
 namespace systole::ibm {
@@ -19,8 +20,9 @@ namespace {
 // switch_off_at > 0: the plate's markers are switched off at that time (the vein-ostia switch of
 // MODEL.md §2) and the run continues to end_time; the reference is then the full channel.
 // switch_off_at < 0: no body at all (the fluid alone over [0, 2]). profile (optional): u(z) out.
+// first_node: the plate by the seed's eq 4 (PlaneForcing) instead of MLS markers.
 double poiseuille_error(int cells_per_unit, double switch_off_at = 0, double end_time = 0.5,
-                        std::vector<double>* profile = nullptr) {
+                        std::vector<double>* profile = nullptr, bool first_node = false) {
   const int nz = 2 * cells_per_unit, nxy = 4;
   const double h = 1.0 / cells_per_unit;
   const grid::Grid g({nxy, nxy, nz, nxy * h, nxy * h, 2.0});
@@ -33,8 +35,14 @@ double poiseuille_error(int cells_per_unit, double switch_off_at = 0, double end
   o.mm_per_unit = 1.0;
   const int plate = markers.add_body(plate_mesh(0, 0, g.lx(), g.ly(), 1.0, 2, 2), "valvular plane", o);
   DirectForcing forcing(slabs, markers, {});
+  PlaneForcing eq4(slabs, RigidPlane{2, 1.0, [](double, double) { return true; }});
+  if (first_node) {
+    markers.set_active(plate, false);
+    forcing.markers_moved();
+  }
   const double G = 8.0;  // peak G/(8ν) = 1
   fluid.set_body_force([&](const fluid::StepContext& c, const fluid::Velocity& uh, fluid::Velocity& f) {
+    if (first_node) eq4.apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, Vec3(G, 0, 0));
     forcing.apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, Vec3(G, 0, 0));
     for (int k = 0; k < f.u.k_count(); ++k)
       for (int j = 0; j < nxy; ++j)
@@ -47,12 +55,14 @@ double poiseuille_error(int cells_per_unit, double switch_off_at = 0, double end
   if (switch_off_at < 0) {
     markers.set_active(plate, false);
     forcing.markers_moved();
+    eq4.set_active(false);
     open = true;
   }
   if (switch_off_at > 0) {
     fluid.advance_to(switch_off_at);
     markers.set_active(plate, false);
     forcing.markers_moved();  // the stencils of the active markers only
+    eq4.set_active(false);
     open = true;
   }
   fluid.advance_to(end_time);  // 0.5: ≈ 5 decay times π²ν of the slowest transient
@@ -70,18 +80,52 @@ double poiseuille_error(int cells_per_unit, double switch_off_at = 0, double end
   return out / peak;
 }
 
-TEST(IbmRigidPlane, MlsPlateActsAsAWallPoiseuilleConverges) {
-  double previous = 0;
+// One MLS run and one eq 4 run per grid (h = 1/8, 1/16, 1/32) give four results:
+// 1. The MLS plate acts as a wall: the error converges at first order (asserted ≥ 0.8 pairwise).
+// 2. Where the diffuse MLS wall sits (the basis of the marker retraction, markers.h): below the
+//    plate the steady flow is exactly u = G z (z_w − z)/(2ν) under the forcing zone; z_w from the
+//    faces z < 1 − 2h (a one-parameter least-squares fit); (z_w − 1)/h is the fraction of a cell
+//    by which the plate looks thicker (measured −0.454, −0.476, −0.483).
+// 3. The seed's eq 4 (first node outside the body, linear interpolation to the wall; Fadlun et
+//    al. 2000 J. Comput. Phys. 161:35): a sharp interface, second order (asserted ≥ 1.8).
+// 4. Equivalence (issue 7: eq 4 "or MLS with a test showing equivalence"): the MLS profile
+//    approaches eq 4's at first order; asserted on the least-squares slope over the three grids
+//    (pairwise orders pre-asymptotic: measured 0.79 and 0.90).
+TEST(IbmRigidPlane, MlsAndEq4PlatesPoiseuilleWallOffsetAndEquivalence) {
+  double previous_mls = 0, previous_eq4 = 0, first_diff = 0, last_diff = 0;
   for (int n : {8, 16, 32}) {
-    const double e = poiseuille_error(n);
-    std::printf("  [measured] plate at z = 1, h = 1/%d: max |u − u_exact| / peak = %.4g\n", n, e);
-    if (previous > 0) {
-      const double order = std::log2(previous / e);
-      std::printf("  [measured]   observed order %.3f\n", order);
-      EXPECT_GE(order, 0.8);
+    std::vector<double> mls, eq4;
+    const double e = poiseuille_error(n, 0, 0.5, &mls, false);
+    const double e4 = poiseuille_error(n, 0, 0.5, &eq4, true);
+    const double h = 1.0 / n, G = 8.0;
+    double num = 0, den = 0, diff = 0;
+    for (std::size_t k = 0; k < mls.size(); ++k) {
+      diff = std::max(diff, std::abs(mls[k] - eq4[k]));  // peak 1
+      const double z = (static_cast<double>(k) + 0.5) * h;  // x-faces at cell-centre heights
+      if (z > 1 - 2 * h) continue;
+      const double a = 0.5 * G * z, r = mls[k] + 0.5 * G * z * z;  // u = a z_w − (G/2) z²
+      num += a * r;
+      den += a * a;
     }
-    previous = e;
+    const double zw = num / den;
+    std::printf("  [measured] h = 1/%d: MLS max |u − u_exact| / peak = %.4g, eq 4 = %.4g, |u_MLS − u_eq4| = %.4g,\n"
+                "             MLS effective wall z_w = %.5f, offset (z_w - 1)/h = %.3f\n", n, e, e4, diff, zw, (zw - 1) / h);
+    EXPECT_LT(zw, 1.0);  // the plate looks thicker on the fluid's side
+    if (previous_mls > 0) {
+      const double order = std::log2(previous_mls / e), order4 = std::log2(previous_eq4 / e4);
+      std::printf("  [measured]   observed order MLS %.3f, eq 4 %.3f, difference %.3f\n", order, order4,
+                  std::log2(last_diff / diff));
+      EXPECT_GE(order, 0.8);
+      EXPECT_GE(order4, 1.8);
+    }
+    if (first_diff == 0) first_diff = diff;
+    last_diff = diff;
+    previous_mls = e;
+    previous_eq4 = e4;
   }
+  const double order = std::log2(first_diff / last_diff) / 2;  // equally spaced log h: end-to-end slope
+  std::printf("  [measured] MLS → eq 4, observed order (least squares, h = 1/8, 1/16, 1/32) %.3f\n", order);
+  EXPECT_GE(order, 0.8);
 }
 
 // Switching the plate off (a marker set closing/opening an opening): the flow relaxes to plane

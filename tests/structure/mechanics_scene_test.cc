@@ -52,6 +52,23 @@ TEST(MechanicsScene, SphereInflatesAndWritesPositions) {
   std::filesystem::remove_all(dir);
 }
 
+// The procedural heart's mitral leaflets closed by 0.3 mmHg (LV over LA) with contact and the
+// limiter (1 mm towards the LA): they touch, nothing crosses, the limiter holds.
+TEST(MechanicsScene, MitralLeafletsCoaptWithContactAndLimiter) {
+  Control control({});
+  const auto s = config::parse_scenario({{"scene", "mechanics"},
+                                         {"structure",
+                                          {{"body", "mitral_leaflets"}, {"cavity_pressure_mmhg", 0.3},
+                                           {"pressure_ramp_ms", 5}, {"end_time_ms", 30}, {"output_interval_ms", 2},
+                                           {"damping_per_ms", 0.3}, {"mitral_limit_mm", 1}}}});
+  const RunResult r = run(s, control);
+  EXPECT_GT(r.metrics.at("contact_pairs_max"), 5);
+  EXPECT_EQ(r.metrics.at("contact_crossed_max"), 0);
+  EXPECT_GT(r.metrics.at("contact_min_gap_mm"), 0.25);
+  EXPECT_LE(r.metrics.at("leaflet_displacement_towards_la_mm"), 1.0 + 1e-9);
+  EXPECT_EQ(r.metrics.count("mitral_anterior_max_strain"), 1u);
+}
+
 TEST(MechanicsScene, CancelStops) {
   Control control({});
   control.cancel = true;
@@ -63,6 +80,10 @@ TEST(MechanicsScene, BadStructureInputIsRejectedByTheTable) {
   EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"shell_thickness_mm", -1}}}}),
                InputError);
   EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"}, {"tissue", {{"lv", {{"fung_c_pa", -13.3}}}}}}),
+               InputError);
+  EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"contact_distance_mm", 0}}}}),
+               InputError);
+  EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"contact_stiffness_kpa_per_mm", -1}}}}),
                InputError);
 }
 

@@ -45,7 +45,7 @@ TEST(Config, DefaultsAreTheSeedsHealthyHeart) {
   EXPECT_DOUBLE_EQ(s.electro.sigma_i_cross_ms_per_cm, 0.8);
   EXPECT_DOUBLE_EQ(s.electro.surface_to_volume_per_cm, 1400);
   EXPECT_EQ(s.electro.lv_cell_model, "ttp06");
-  EXPECT_EQ(s.electro.la_cell_model, "fhn");
+  EXPECT_EQ(s.electro.la_cell_model, "fhn_atrial");
   EXPECT_DOUBLE_EQ(s.fluid.kinematic_viscosity_m2_per_s, 4.8e-6);
   EXPECT_EQ(s.fluid.nx, 129);
   EXPECT_EQ(s.fluid.nz, 145);
@@ -115,7 +115,7 @@ TEST(Config, CrossFieldRules) {
 
 TEST(Config, UnimplementedSceneIsAnErrorNotAFallback) {
   const std::string e = error_of({{"scene", "fsei"}});
-  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic, fluid, electro, mechanics, ibm"), std::string::npos) << e;
+  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic, fluid, electro, mechanics, ibm, electromechanics"), std::string::npos) << e;
   EXPECT_NE(error_of({{"scene", "warp"}}).find("unknown scene 'warp'; known: lumped"), std::string::npos);
 }
 
@@ -182,7 +182,8 @@ TEST(Config, ProtoAndParameterTableAgree) {
       case Kind::kReal: EXPECT_EQ(field->cpp_type(), FD::CPPTYPE_DOUBLE) << path; break;
       case Kind::kInt: EXPECT_EQ(field->cpp_type(), FD::CPPTYPE_INT32) << path; break;
       case Kind::kBool: EXPECT_EQ(field->cpp_type(), FD::CPPTYPE_BOOL) << path; break;
-      case Kind::kChoice: EXPECT_EQ(field->cpp_type(), FD::CPPTYPE_STRING) << path; break;
+      case Kind::kChoice:
+      case Kind::kString: EXPECT_EQ(field->cpp_type(), FD::CPPTYPE_STRING) << path; break;
       case Kind::kRealList: EXPECT_TRUE(field->is_repeated() && field->cpp_type() == FD::CPPTYPE_DOUBLE) << path; break;
       case Kind::kChoiceList: EXPECT_TRUE(field->is_repeated() && field->cpp_type() == FD::CPPTYPE_STRING) << path; break;
     }

@@ -27,17 +27,25 @@ class MpiEnvironment final : public ::testing::Environment {
 const auto* const mpi_environment = ::testing::AddGlobalTestEnvironment(new MpiEnvironment);
 
 TEST(Scene, AdvertisedMetricsAreProduced) {
-  for (const std::string scene : {"lumped", "analytic", "fluid", "electro", "mechanics", "ibm"}) {
+  for (const std::string scene : {"lumped", "analytic", "fluid", "electro", "mechanics", "ibm", "electromechanics"}) {
     // The default fluid scenario is the seed's grid 1 (128x128x144 cells, ~30 s): this test
     // takes a small grid and a short run of the default case instead (deliberately).
     const nlohmann::json small_fluid{{"nx", 17}, {"ny", 17}, {"nz", 9}, {"end_time_ms", 8}};
     // The default electro scenario is the whole left heart over beats: a small sheet instead.
     const nlohmann::json small_electro{{"mesh", "sheet"}, {"mesh_size_x_mm", 4}, {"mesh_size_y_mm", 2},
                                        {"end_time_ms", 10}, {"model", "monodomain"}};
+    // The default electromechanics scenario is beats of the 2 mm heart: one short beat of a 4 mm one.
+    const nlohmann::json small_em{{"scene", scene},
+                                  {"beats", 1},
+                                  {"heart_rate_bpm", 240},
+                                  {"geometry", {{"target_edge_mm", 4}}},
+                                  {"electro", {{"model", "monodomain"}, {"time_step_ms", 0.1}}},
+                                  {"electromechanics", {{"la_chamber", "lumped"}, {"field_interval_ms", 0}}}};
     config::Scenario s = config::parse_scenario(
-        scene == "fluid"     ? nlohmann::json{{"scene", scene}, {"fluid", small_fluid}}
-        : scene == "electro" ? nlohmann::json{{"scene", scene}, {"electro", small_electro}}
-                             : nlohmann::json{{"scene", scene}});
+        scene == "fluid"              ? nlohmann::json{{"scene", scene}, {"fluid", small_fluid}}
+        : scene == "electro"          ? nlohmann::json{{"scene", scene}, {"electro", small_electro}}
+        : scene == "electromechanics" ? small_em
+                                      : nlohmann::json{{"scene", scene}});
     Quiet control;
     const RunResult r = run(s, control);
     ASSERT_FALSE(metric_names(scene).empty()) << scene;

@@ -52,8 +52,8 @@ std::size_t CellModel::state_index(std::string_view name) const {
 }
 
 const std::vector<std::string>& cell_model_names() {
-  static const std::vector<std::string> names{"aliev_panfilov", "mitchell_schaeffer", "fhn", "ttp06",
-                                              "ttp06_endo",     "ttp06_mid",          "ttp06_epi"};
+  static const std::vector<std::string> names{"aliev_panfilov", "mitchell_schaeffer", "fhn",      "fhn_atrial",
+                                              "ttp06",          "ttp06_endo",         "ttp06_mid", "ttp06_epi"};
   return names;
 }
 
@@ -61,6 +61,7 @@ std::unique_ptr<CellModel> make_cell_model(std::string_view name, std::size_t no
   if (name == "aliev_panfilov") return make_aliev_panfilov(nodes);
   if (name == "mitchell_schaeffer") return make_mitchell_schaeffer(nodes);
   if (name == "fhn") return make_fitzhugh_nagumo(nodes);
+  if (name == "fhn_atrial") return make_fitzhugh_nagumo_atrial(nodes);
   if (name == "ttp06" || name == "ttp06_epi") return make_ttp06(nodes, Ttp06Cell::kEpi);
   if (name == "ttp06_endo") return make_ttp06(nodes, Ttp06Cell::kEndo);
   if (name == "ttp06_mid") return make_ttp06(nodes, Ttp06Cell::kMid);

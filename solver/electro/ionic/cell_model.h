@@ -53,6 +53,8 @@ class CellModel {
   // Advances the state of the nodes in `range` by dt_ms at the given potentials and writes
   // iion[node] (uA/uF) for those nodes. vm_mv and iion are indexed by node (size() entries).
   // The potential is NOT changed here: the caller integrates dVm/dt = -Iion (+ diffusion).
+  // Calls on disjoint ranges may run concurrently once compute() has been called with this dt
+  // (a zero-length range is enough: per-dt tables are built then, not per node).
   virtual void compute(NodeRange range, double dt_ms, const double* vm_mv, double* iion) = 0;
 
   // --- parameters (limpet-style: by name) ---
@@ -92,8 +94,9 @@ class CellModel {
 
 // --- registry ---------------------------------------------------------------------------
 
-// Registry names, in a fixed order: aliev_panfilov, mitchell_schaeffer, fhn, ttp06 (= ttp06_epi),
-// ttp06_endo, ttp06_mid, ttp06_epi.
+// Registry names, in a fixed order: aliev_panfilov, mitchell_schaeffer, fhn, fhn_atrial (ours:
+// FHN with a 30x faster Vm equation, atrial CV), ttp06 (= ttp06_epi), ttp06_endo, ttp06_mid,
+// ttp06_epi.
 const std::vector<std::string>& cell_model_names();
 // A model for `nodes` nodes in its initial state. Throws InputError("unknown cell model
 // 'x'; known: ...") for an unknown name.

@@ -91,26 +91,44 @@ class MitchellSchaeffer final : public CellModel {
 // Sundnes et al. 2006 (Computing the Electrical Activity in the Heart, Springer, §2.4.1):
 //   dVm/dt = c1/A^2 (Vm - Vr)(Vm - Vth)(Vp - Vm) - c2/A (Vm - Vr) s,   A = Vp - Vr,
 //   ds/dt  = b (Vm - Vr - c3 s),   Vth = Vr + a A.
-// Units: Vm in mV, t in ms, s in mV; c1, c2 and b in 1/ms... (c1, c2 per ms, b per ms).
+// Units: Vm in mV, t in ms, s in mV; c1, c2 and b in 1/ms.
 // Iion = -(first line); s by forward Euler.
+//
+// "fhn_atrial" (ours): the same equations with the fast (Vm) equation sped up by a factor
+// k = kAtrialFastFactor, i.e. c1 -> k c1 and c2 -> k c2 (a, c3, Vr, Vp unchanged; the ratio
+// c1/c2, hence the nullcline geometry, is kept). The front speed of the bistable cubic scales as
+// sqrt(c1 D) (1 - 2a), so where the Sundnes set conducts at ~0.13 m/s with the seed's
+// conductivities, k = 30 gives ~0.9 m/s along the fibres: the human atrial CV (Heida et al.
+// 2021, J Clin Med 10:2614: biatrial median CV 92 +- 6 cm/s in patients without AF). With the
+// faster Vm equation the AP follows the nullcline and would end at APD90 ~ 92 ms, so the
+// recovery rate b is lowered from 0.013 to 0.006 /ms to give an atrial APD90 of ~190 ms at 1 Hz
+// (ours; the 150-250 ms range asked for in issue #4). Measured in docs/electro.md.
+constexpr double kAtrialFastFactor = 30.0;
+
 class FitzHughNagumo final : public CellModel {
  public:
-  explicit FitzHughNagumo(std::size_t n)
+  FitzHughNagumo(std::size_t n, bool atrial)
       : CellModel(n, {{"a", 0.13, "1", "threshold fraction of the amplitude (Sundnes et al. 2006)"},
-                      {"b", 0.013, "1/ms", "recovery rate"},
-                      {"c1", 0.26, "1/ms", "excitation rate"},
-                      {"c2", 0.1, "1/ms", "recovery coupling"},
+                      {"b", atrial ? 0.006 : 0.013, "1/ms",
+                       atrial ? "recovery rate (ours: APD90 ~190 ms at 1 Hz)" : "recovery rate"},
+                      {"c1", 0.26 * (atrial ? kAtrialFastFactor : 1.0), "1/ms",
+                       atrial ? "excitation rate: 30 x Sundnes et al. 2006 (ours)" : "excitation rate"},
+                      {"c2", 0.1 * (atrial ? kAtrialFastFactor : 1.0), "1/ms",
+                       atrial ? "recovery coupling: 30 x Sundnes et al. 2006 (ours)" : "recovery coupling"},
                       {"c3", 1.0, "1", "recovery decay"},
                       {"vm_rest", -85.0, "mV", "resting potential Vr"},
-                      {"vm_peak", 40.0, "mV", "peak potential Vp"}}) {
+                      {"vm_peak", 40.0, "mV", "peak potential Vp"}}),
+        atrial_(atrial) {
     allocate_state();
   }
-  std::string_view name() const override { return "fhn"; }
+  std::string_view name() const override { return atrial_ ? "fhn_atrial" : "fhn"; }
   std::vector<std::string> state_names() const override { return {"s"}; }
   double resting_potential_mv() const override { return p(5); }
   double peak_potential_mv() const override { return p(6); }
-  // |dF/dVm| <= ~ c1 (1 + a) ~ 0.3/ms: explicit limit ~ 6 ms; declared 0.5 ms (ours).
-  double max_stable_dt_ms() const override { return 0.5; }
+  // |dF/dVm| <= ~ c1 (1 + a) + c2 s/A: explicit limit ~ 6 ms for the Sundnes set; declared
+  // 0.5 ms (ours). fhn_atrial: ~ 8/ms -> explicit limit ~ 0.25 ms; declared 0.1 ms (ours, the
+  // ~1 ms upstroke).
+  double max_stable_dt_ms() const override { return atrial_ ? 0.1 : 0.5; }
   std::vector<double> initial_state() const override { return {0.0}; }
   void compute(NodeRange r, double dt, const double* vm, double* iion) override {
     const double a = p(0), b = p(1), c1 = p(2), c2 = p(3), c3 = p(4), vr = p(5), vp = p(6);
@@ -123,6 +141,9 @@ class FitzHughNagumo final : public CellModel {
       iion[i] = -dvdt;
     }
   }
+
+ private:
+  bool atrial_;
 };
 
 }  // namespace
@@ -131,6 +152,9 @@ std::unique_ptr<CellModel> make_aliev_panfilov(std::size_t n) { return std::make
 std::unique_ptr<CellModel> make_mitchell_schaeffer(std::size_t n) {
   return std::make_unique<MitchellSchaeffer>(n);
 }
-std::unique_ptr<CellModel> make_fitzhugh_nagumo(std::size_t n) { return std::make_unique<FitzHughNagumo>(n); }
+std::unique_ptr<CellModel> make_fitzhugh_nagumo(std::size_t n) { return std::make_unique<FitzHughNagumo>(n, false); }
+std::unique_ptr<CellModel> make_fitzhugh_nagumo_atrial(std::size_t n) {
+  return std::make_unique<FitzHughNagumo>(n, true);
+}
 
 }  // namespace systole::electro::ionic

@@ -1,0 +1,126 @@
+#pragma once
+// Contact between different bodies (issue 5, Deliver 2; MODEL.md §5 "Contact") and the lockstep
+// sub-cycling of several ShellModel bodies that it needs.
+//
+// Scheme (ours; the seed's cell-tagging rule is ContactRule::kCellAverage below): node-to-surface penalty.
+// For every node i of body A and every other body B, the closest point p of B's surface (over
+// the triangles of B near i, from Verlet candidate lists built on a uniform spatial hash with
+// cells of d_c + skin) with barycentric weights w_j on B's triangle and distance d = |x_i - p|.
+// The side of B the node is on is remembered from when the node was at d >= d_c (sign of
+// (x_i - p) . n_T, recorded only when that sign is clear: a closest point inside a face, or
+// |(x_i - p) . n_T| >= d / 2); inside the contact layer d < d_c the signed gap is
+//   g = sigma d,  sigma = +1 on the remembered side (or no side known), -1 across it,
+// and the penalty energy W = (k_i / 2) (d_c - g)^2, k_i = kappa A_i (A_i the node's stress-free
+// lumped area, kappa in kPa/mm: a contact pressure per mm of penetration into the layer) gives
+//   F_i = k_i (d_c - g) sigma u,  u = (x_i - p) / d,   F_{B,j} = -w_j F_i  on B's triangle nodes.
+// By the envelope theorem (p is the minimiser of |x_i - q| over B's surface) these are exactly
+// -grad W, so the scheme is conservative; they sum to zero (momentum) and, F_i being parallel to
+// x_i - p, their torque vanishes too. A node that crossed B (g < 0) is pushed back, with a force
+// that grows with the depth, not through. Both orders (A, B) and (B, A) are evaluated.
+// The penalty's stiffness enters each node's Gershgorin row (2 k_i on i, 2 k_i w_j on B's nodes),
+// so the bodies' stable_step_ms() include it.
+// Not detected (ours): edge-edge crossings with no node inside the other body's layer (meshes
+// of similar resolution face to face do not produce them in our tests); self-contact of a body.
+// Pairs that are already within d_c in the stress-free meshes (shared annulus, commissures)
+// are excluded for that node and body.
+#include <cstdint>
+#include <vector>
+
+#include "solver/structure/shell.h"
+
+namespace systole::structure {
+
+// Contact rules: kPenalty (above, the default) or kCellAverage, the seed's rule (MODEL.md §5):
+// space is divided into cubic cells of side d_c; after every substep the free nodes of a cell that
+// holds nodes of two or more bodies all take the mass-weighted average velocity of the cell's free
+// nodes (mass weights: ours, so momentum is conserved; no forces, no effect on the stable step).
+enum class ContactRule { kPenalty, kCellAverage };
+
+struct ContactOptions {
+  bool enabled = true;
+  ContactRule rule = ContactRule::kPenalty;
+  double distance_mm = 0.5;             // d_c: thickness of the contact layer
+  double stiffness_kpa_per_mm = 40;     // kappa: k_i = kappa A_i (contact pressure kappa (d_c - g))
+  double skin_mm = 0.25;                // Verlet skin of the candidate lists (rebuilt when any
+                                        // node moved more than skin/2 since the last build)
+};
+
+// Closest point of triangle (a, b, c) to x: p = w0 a + w1 b + w2 c; interior: inside the face.
+struct TrianglePoint {
+  Vec3 p;
+  double w[3];
+  bool interior;
+};
+TrianglePoint closest_point_on_triangle(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c);
+
+struct ContactStats {
+  int active = 0;              // node-surface pairs with d < d_c (g < d_c)
+  int crossed = 0;             // of which g < 0 (node on the wrong side of the other surface)
+  double min_gap_mm = 1e300;   // smallest g over the active pairs
+  double energy_uj = 0;        // sum of the penalty energies
+  long candidate_builds = 0;   // rebuilds of the candidate lists so far
+  long candidates = 0;         // node-triangle candidates in the current lists (all pairs)
+  long evaluated_nodes = 0;    // nodes whose closest point was computed at the last evaluation
+  int shared_cells = 0;        // kCellAverage: cells holding nodes of several bodies (last substep)
+};
+
+// Several bodies advanced in lockstep (one substep for all, the smallest stable step), with
+// contact between different bodies. Owns its bodies (a copy saves and restores the whole state).
+class BodyGroup {
+ public:
+  // Throws InputError for a non-positive distance or negative stiffness or skin, or threads
+  // outside [1, 256]. threads > 1 spreads the bodies over OpenMP threads in every substep
+  // (each body's own force loop then runs on one thread; the contact pass is serial).
+  BodyGroup(std::vector<ShellModel> bodies, const ContactOptions& options, int threads = 1);
+
+  std::size_t body_count() const { return bodies_.size(); }
+  ShellModel& body(std::size_t k) { return bodies_[k]; }
+  const ShellModel& body(std::size_t k) const { return bodies_[k]; }
+  const ContactOptions& options() const { return options_; }
+
+  // Smallest stable step of the bodies (contact stiffness included).
+  double stable_step_ms() const;
+  // Like ShellModel::advance, for all bodies together: n = ceil(T / stable step) equal substeps,
+  // re-planned when the refreshed stable step falls below the substep; loads held; the same
+  // strain, step-collapse and energy-growth checks, per body.
+  AdvanceStats advance(double T_ms);
+  // One substep for all bodies: half kick + drift of each, contact forces at the new positions,
+  // forces + half kick of each.
+  void substep(double dt_ms);
+  // Recomputes the contact loads at the current positions and the bodies' forces (after
+  // set_state on a body, or to read the contact state of a configuration).
+  void refresh_contact();
+
+  // Contact state at the last evaluation.
+  const ContactStats& contact_stats() const { return stats_; }
+  // Contact forces (mN) on the nodes of body k at the last evaluation (zero when off).
+  const std::vector<Vec3>& contact_forces_mn(std::size_t k) const { return force_[k]; }
+  // Penalty energy of the bodies at their current positions, with the remembered sides (uJ).
+  double contact_energy_uj() const { return stats_.energy_uj; }
+
+ private:
+  struct Pair {
+    std::size_t a, b;                       // nodes of a against the surface of b
+    std::vector<std::int32_t> offset, tri;  // candidate triangles of b per node of a (CSR)
+    std::vector<std::int8_t> side;          // remembered side (+1, -1; 0 unknown)
+    std::vector<std::uint8_t> excluded;     // within d_c of b in the stress-free meshes
+  };
+  struct TriangleHash;
+  static TriangleHash hash_triangles(const std::vector<Vec3>& x, const std::vector<geometry::Tri>& tri, double radius);
+  static void build_candidates(Pair& pair, const std::vector<Vec3>& xa, const TriangleHash& hash);
+  void maybe_rebuild();
+  void evaluate_contact();
+  void average_shared_cells();  // kCellAverage
+
+  std::vector<ShellModel> bodies_;
+  ContactOptions options_;
+  std::vector<Pair> pairs_;
+  std::vector<std::vector<double>> area_;       // lumped stress-free node areas
+  std::vector<std::vector<Vec3>> x_build_;      // positions at the last candidate build
+  std::vector<std::vector<Vec3>> force_;        // contact forces per body
+  std::vector<std::vector<double>> row_;        // contact stiffness rows per body
+  ContactStats stats_;
+  int threads_ = 1;
+};
+
+}  // namespace systole::structure
