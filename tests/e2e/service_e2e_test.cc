@@ -94,6 +94,34 @@ TEST_F(ServiceE2E, HealthyJobSucceedsWithResultsAndVerifiedArtifacts) {
   EXPECT_TRUE(body["metrics"].contains("cardiac_output_l_min"));
 }
 
+TEST_F(ServiceE2E, ElectromechanicsJobRunsOnTheWorkersWithPerBeatMetricsAndFields) {
+  // A short, coarse electromechanics job (issue #8): 2 beats of 250 ms on the 4 mm heart.
+  const nlohmann::json scenario{{"scene", "electromechanics"},
+                                {"beats", 2},
+                                {"periodicity_tolerance", 0},
+                                {"heart_rate_bpm", 240},
+                                {"geometry", {{"target_edge_mm", 4}}},
+                                {"electro", {{"model", "monodomain"}, {"time_step_ms", 0.1}}},
+                                {"electromechanics", {{"la_chamber", "lumped"}, {"field_interval_ms", 50}}}};
+  const std::string id = submit(*server_, scenario);
+  ASSERT_TRUE(wait_for_state(*server_, id, v1::SUCCEEDED, std::chrono::seconds(300))) << server_->log();
+  v1::GetResultRequest request;
+  request.set_id(id);
+  v1::Result result;
+  auto context = deadline_context();
+  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  for (const char* key : {"ejection_fraction_percent", "cardiac_output_l_min", "lv_peak_pressure_mmhg",
+                          "lv_twist_end_systole_deg", "global_longitudinal_strain_percent", "max_volume_mismatch_ml",
+                          "beats_simulated", "wall_time_s"})
+    EXPECT_TRUE(result.metrics().contains(key)) << key;
+  EXPECT_EQ(result.metrics().at("beats_simulated"), 2);
+  EXPECT_EQ(result.beats_size(), 2);
+  std::set<std::string> names;
+  for (const auto& a : result.artifacts()) names.insert(a.name());
+  for (const char* f : {"metrics.json", "pv_loop.csv", "result.h5", "time_series.csv", "em_fields.h5", "em_fields.xmf"})
+    EXPECT_TRUE(names.count(f)) << f;
+}
+
 TEST_F(ServiceE2E, WatchStreamsStatesInOrderAndResumes) {
   const std::string id = submit(*server_, {{"scene", "lumped"}, {"beats", 5}, {"periodicity_tolerance", 0}});
   std::vector<v1::JobEvent> events;
