@@ -480,6 +480,16 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
     result.notes.push_back("node positions, Vm and active tension of the last beat every " +
                            std::to_string(em.field_interval_ms) + " ms in em_fields.h5 (+ em_fields.xmf)");
   }
+  // Warnings a user must see next to the numbers (ours).
+  if (max_mismatch_ml > 0.1)
+    result.notes.push_back("warning: the cavity constraint left up to " + std::to_string(max_mismatch_ml) +
+                           " ml between the wall's and the blood's volume (" +
+                           std::to_string(st.unconverged_intervals) +
+                           " intervals hit coupling.strong_max_iterations): raise it or shorten "
+                           "electromechanics.sync_step_ms");
+  if (result.metrics.count("stroke_volume_ml") && result.metrics["stroke_volume_ml"] <= 0)
+    result.notes.push_back("warning: no ejection in the last beat (ESV >= EDV): the scene is not calibrated, "
+                           "docs/electromechanics.md");
   std::ostringstream note;
   note << beats_done << " beat(s); " << (periodic ? "periodic state reached" : "beats limit reached") << "; "
        << st.intervals << " coupling intervals, " << result.metrics["coupling_passes_per_interval"]
