@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "solver/config/scenario.h"
@@ -57,6 +58,42 @@ TEST(ElectromechanicsScene, CoarseBeatHoldsTheVolumeConstraintAndTheWallBuildsPr
   EXPECT_GE(control.reports, 10);
   ASSERT_FALSE(r.series.empty());
   EXPECT_EQ(r.series[0].name, "time_s");
+}
+
+// Responses in the right direction on the coarse beat (issue #8). The scene is not calibrated
+// (no ejection yet, docs/electromechanics.md), so the responses are read where this model
+// already has them: the isovolumic peak pressure for the tension amplitude, the EDV for the
+// passive stiffness, the onset of contraction (first time after 80 ms, before the earliest His
+// stimulus, that the LV pressure exceeds its value at 80 ms by 3 mmHg) for the His delay.
+TEST(ElectromechanicsScene, ResponsesToTensionStiffnessAndHisDelayGoTheRightWay) {
+  Quiet control;
+  auto run_with = [&](const nlohmann::json& patch) {
+    nlohmann::json j = coarse(1);
+    j.merge_patch(patch);
+    return run_electromechanics(config::parse_scenario(j), control);
+  };
+  auto onset_ms = [](const RunResult& r) {
+    const auto& t = r.series.at(0).values;
+    const auto& p = r.series.at(1).values;  // lv_pressure_mmhg
+    EXPECT_EQ(r.series.at(1).name, "lv_pressure_mmhg");
+    std::size_t i0 = 0;
+    while (i0 + 1 < t.size() && 1000 * t[i0] < 80) ++i0;
+    for (std::size_t i = i0; i < p.size(); ++i)
+      if (p[i] > p[i0] + 3) return 1000 * t[i];
+    return -1.0;
+  };
+  const RunResult base = run_with(nlohmann::json::object());
+  const RunResult strong = run_with({{"tissue", {{"active_tension_k_kpa", 47.9 * 1.5}}}});
+  const RunResult stiff = run_with({{"electromechanics", {{"passive_stiffness_scale", 2000}}}});
+  const RunResult late = run_with({{"av_delay_ms", 150}});
+  std::printf("peak p: base %.2f, k_tau x1.5 %.2f mmHg | EDV: base %.3f, c x2 %.3f ml | onset: base %.1f, "
+              "His +50 ms %.1f ms\n",
+              base.metrics.at("lv_peak_pressure_mmhg"), strong.metrics.at("lv_peak_pressure_mmhg"),
+              base.metrics.at("edv_ml"), stiff.metrics.at("edv_ml"), onset_ms(base), onset_ms(late));
+  EXPECT_GT(strong.metrics.at("lv_peak_pressure_mmhg"), base.metrics.at("lv_peak_pressure_mmhg") + 2);
+  EXPECT_LT(stiff.metrics.at("edv_ml"), base.metrics.at("edv_ml"));
+  ASSERT_GT(onset_ms(base), 0);
+  EXPECT_NEAR(onset_ms(late) - onset_ms(base), 50, 15);
 }
 
 TEST(ElectromechanicsScene, SyncStepNotAMultipleOfTheEpStepIsAnInputError) {
