@@ -243,33 +243,24 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   // 5. the cavity constraints: one pressure per chamber, on the wall and on the 0-D chamber
   lumped::ImposedPressures imposed;
   constexpr double kInitialSlopeMlPerMmHg = 1.0;  // the secant adapts it from the first interval
-  lv.constraint = std::make_unique<coupling::CavityPressureConstraint>(
-      "lv_cavity",
-      coupling::CavityPressureConstraint::Access{
-          .mesh_volume_ml = [&] { return lv.volume_ml(); },
-          .blood_volume_ml = [&] { return circulation.readout().lv_volume_ml; },
-          .time_ms = [&] { return lv.model->time_ms(); },
-          .impose_pressure_mmhg =
-              [&](double p) {
-                lv.model->set_cavity_pressure(kpa_from_mmhg(p));
-                imposed.lv_mmhg = p;
-                circulation.set_imposed_pressures(imposed);
-              }},
-      0.0, kInitialSlopeMlPerMmHg);
-  if (la)
-    la->constraint = std::make_unique<coupling::CavityPressureConstraint>(
-        "la_cavity",
+  // The chamber's blood volume in the 0-D state and its imposed pressure, by member.
+  auto add_constraint = [&](Chamber& c, double lumped::Readout::*blood_ml, double lumped::ImposedPressures::*p_mmhg) {
+    c.constraint = std::make_unique<coupling::CavityPressureConstraint>(
+        c.name + "_cavity",
         coupling::CavityPressureConstraint::Access{
-            .mesh_volume_ml = [&] { return la->volume_ml(); },
-            .blood_volume_ml = [&] { return circulation.readout().la_volume_ml; },
-            .time_ms = [&] { return la->model->time_ms(); },
+            .mesh_volume_ml = [&c] { return c.volume_ml(); },
+            .blood_volume_ml = [&circulation, blood_ml] { return circulation.readout().*blood_ml; },
+            .time_ms = [&c] { return c.model->time_ms(); },
             .impose_pressure_mmhg =
-                [&](double p) {
-                  la->model->set_cavity_pressure(kpa_from_mmhg(p));
-                  imposed.la_mmhg = p;
+                [&c, &imposed, &circulation, p_mmhg](double p) {
+                  c.model->set_cavity_pressure(kpa_from_mmhg(p));
+                  imposed.*p_mmhg = p;
                   circulation.set_imposed_pressures(imposed);
                 }},
         0.0, kInitialSlopeMlPerMmHg);
+  };
+  add_constraint(lv, &lumped::Readout::lv_volume_ml, &lumped::ImposedPressures::lv_mmhg);
+  if (la) add_constraint(*la, &lumped::Readout::la_volume_ml, &lumped::ImposedPressures::la_mmhg);
 
   // 6. the stages of one synchronisation interval (Fig. 6 without the fluid)
   std::vector<double> shell_tension;
