@@ -34,6 +34,7 @@ class ConsoleControl final : public scene::RunControl {
       auto it = p.latest_beat_metrics.find(key);
       if (it != p.latest_beat_metrics.end()) std::cerr << "  " << key << " = " << std::setprecision(3) << it->second;
     }
+    if (!p.message.empty()) std::cerr << "  " << p.message;
     std::cerr << "\n";
   }
   bool cancel_requested() override { return false; }

@@ -99,9 +99,20 @@ std::vector<Param> build_table() {
                                     "Tissue density, every body (seed)."));
   t.push_back(SYSTOLE_REAL(tissue.poisson_ratio, "", 0.5, 0, 0.5,
                            "Poisson ratio nu_m in the bending stiffness (eq 19)."));
-  t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 47.9, 0, 1000,
+  t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 110, 0, 1000,
                            "Nash-Panfilov active tension amplitude k_tau (Nash & Panfilov 2004: "
-                           "47.9 kPa); calibrated by the electromechanics scene."));
+                           "47.9 kPa); 110 calibrated by the electromechanics scene (docs/electromechanics.md)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.active_tension_time_scale_ms, "ms", 3, 0, 1000,
+                                    "Nash-Panfilov time unit t_scale (eq 23): the tension rises with time constant "
+                                    "10 t_scale and relaxes with t_scale (Nash & Panfilov 2004: 12.9 ms; 3 ms "
+                                    "calibrated by the electromechanics scene, ours)."));
+  t.push_back(SYSTOLE_REAL(tissue.active_min_fibre_stretch, "", 0.6, 0, 0.99,
+                           "Length-tension relation of the active fibre stress (ours): the tension is "
+                           "tau f(lambda), f = 1 - ((1 - lambda)/(1 - m))^2 between this stretch m and 1, 0 below "
+                           "m, 1 above 1; 0: no length dependence (the seed's eq 24)."));
+  t.push_back(SYSTOLE_REAL(tissue.active_cross_fibre_fraction, "", 0.5, 0, 1,
+                           "Cross-fibre active stress as a fraction of the fibre stress (ours; a membrane "
+                           "stand-in for the transmural fibre rotation of the real wall); 0: fibre only (the seed's)."));
   // --- geometry variant (MODEL.md §1) ---------------------------------------------------
   t.push_back(SYSTOLE_REAL(geometry.lv_short_axis_mm, "mm", 58, 20, 120, "LV equatorial diameter."));
   t.push_back(SYSTOLE_REAL(geometry.lv_long_axis_mm, "mm", 75, 30, 140, "LV base-apex length."));
@@ -361,9 +372,14 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(analytic.b, "", 0.1, -100, 100, "Ishigami b (benchmark value 0.1)."));
   // --- structure and scene "mechanics" (solver/structure/README.md) ---------------------
   t.push_back(SYSTOLE_CHOICE(structure.law, "fung",
-                             (std::vector<std::string_view>{"fung", "linear", "neo_hookean"}),
-                             "In-plane spring law of every tissue (eq 17 'fung'; 'linear' and 'neo_hookean' share its "
-                             "small-strain modulus c alpha)."));
+                             (std::vector<std::string_view>{"fung", "linear", "neo_hookean", "fung_tension"}),
+                             "In-plane spring law of every tissue (eq 17 'fung'; 'linear', 'neo_hookean' and "
+                             "'fung_tension' share its small-strain modulus c alpha; 'fung_tension', ours: the Fung "
+                             "exponential in tension only, capped at structure.fung_exponent_cap, linear in "
+                             "compression)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.fung_exponent_cap, "", 4, 0, 100,
+                                    "Law 'fung_tension': the largest Fung exponent alpha eps^2; beyond it the stress "
+                                    "grows linearly with the tangent there (ours; bounds the explicit stable step)."));
   t.push_back(SYSTOLE_CHOICE(structure.body, "sphere",
                              (std::vector<std::string_view>{"sphere", "sheet", "left_heart", "lv", "mitral_leaflets"}),
                              "Scene 'mechanics': the body - a closed spherical shell, a square sheet clamped on its "
@@ -449,13 +465,27 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.sync_step_ms, "ms", 1, 0, 20,
                                     "Scene 'electromechanics': synchronisation step of the multirate scheduler "
                                     "(a multiple of electro.time_step_ms; each module sub-cycles inside it)."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.passive_stiffness_scale, "", 1000, 0, 1e4,
-                                    "Scene 'electromechanics': factor on the LV and LA Fung c (ours; provisional, calibration not done: "
+  t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.passive_stiffness_scale, "", 30, 0, 1e4,
+                                    "Scene 'electromechanics': factor on the LV and LA Fung c (ours; calibrated: "
                                     "docs/electromechanics.md)."));
   t.push_back(SYSTOLE_CHOICE(electromechanics.la_chamber, "lumped",
                              (std::vector<std::string_view>{"lumped", "shell"}),
                              "Scene 'electromechanics': the LA as the 0-D elastance chamber or as a 3-D shell wall "
                              "(experimental: the constraint does not hold it yet, docs/electromechanics.md)."));
+  t.push_back(SYSTOLE_BOOL(electromechanics.passive_annulus, true,
+                           "Scene 'electromechanics': nodes on the valvular plane's anchor ring and one edge from it "
+                           "carry no active tension (ours: the fibrous annulus is not muscle)."));
+  t.push_back(SYSTOLE_CHOICE(electromechanics.spring_law, "fung_tension",
+                             (std::vector<std::string_view>{"fung", "linear", "neo_hookean", "fung_tension"}),
+                             "Scene 'electromechanics': in-plane spring law of the LV and LA walls, used instead of "
+                             "structure.law (calibrated: docs/electromechanics.md)."));
+  t.push_back(SYSTOLE_BOOL(electromechanics.bending, false,
+                           "Scene 'electromechanics': bending springs on the LV and LA walls, used instead of "
+                           "structure.bending (off in the calibration: docs/electromechanics.md)."));
+  t.push_back(SYSTOLE_BOOL(electromechanics.isotropic_passive, true,
+                           "Scene 'electromechanics': the LV and LA cross-fibre Fung exponent set to the fibre's "
+                           "(ours: a membrane without the wall's transmural fibre rotation needs cross-fibre "
+                           "stiffness); false: tissue.*.alpha_c."));
   t.push_back(SYSTOLE_REAL(electromechanics.field_interval_ms, "ms", 50, 0, 1e4,
                            "Scene 'electromechanics': node positions, Vm and active tension every this over "
                            "the last beat (em_fields.h5 + .xmf); 0: none."));

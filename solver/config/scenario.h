@@ -23,6 +23,9 @@ struct Tissue {
   double density_g_per_ml;
   double poisson_ratio;
   double active_tension_k_kpa;
+  double active_tension_time_scale_ms;  // Nash-Panfilov t_scale (eq 23)
+  double active_min_fibre_stretch;      // length-tension (ours); 0: none
+  double active_cross_fibre_fraction;   // cross-fibre active stress / fibre (ours); 0: none
 };
 
 struct Geometry {
@@ -155,6 +158,7 @@ struct Structure {
   double contact_stiffness_kpa_per_mm;
   bool mitral_limiter;                  // body "mitral_leaflets": the seed's displacement limiter
   double mitral_limit_mm;
+  double fung_exponent_cap;             // law "fung_tension": largest a eps^2 (ours)
 };
 
 // Scene "ibm": immersed-boundary verification flows (solver/scene/ibm_scene.h), nondimensional
@@ -183,6 +187,10 @@ struct Electromechanics {
   double passive_stiffness_scale;  // factor on the LV and LA Fung c in this scene (ours)
   std::string la_chamber;          // "shell" or "lumped"
   double field_interval_ms;        // node fields over the last beat; 0: none
+  bool passive_annulus;            // no active tension within one edge of the anchor ring (ours)
+  std::string spring_law;          // the chamber walls' law in this scene (instead of structure.law)
+  bool bending;                    // bending on the chamber walls (instead of structure.bending)
+  bool isotropic_passive;          // alpha_c = alpha_f for the LV and LA in this scene (ours)
 };
 
 struct Scenario {

@@ -52,6 +52,16 @@ std::unique_ptr<Eigen::SimplicialLDLT<SparseMatrix>> factorise(const SparseMatri
   return s;
 }
 
+// The Nash–Panfilov parameters of the options (tension.h defaults with k_tau and t_scale).
+TensionParams tension_params(const TissueOptions& o) {
+  if (!(o.tension_time_scale_ms > 0))
+    throw InputError("tissue.active_tension_time_scale_ms = " + std::to_string(o.tension_time_scale_ms) +
+                     " ms must be > 0");
+  TensionParams p = default_tension_params(o.tension_k_kpa);
+  p.t_scale_ms = o.tension_time_scale_ms;
+  return p;
+}
+
 }  // namespace
 
 Formulation formulation_from_name(const std::string& name) {
@@ -75,7 +85,7 @@ TissueSolver::TissueSolver(ElectroMesh mesh, TissueOptions options)
     : mesh_(std::move(mesh)),
       options_(std::move(options)),
       activation_({}, options_.activation_threshold_mv),
-      tension_(0, default_tension_params(options_.tension_k_kpa)) {
+      tension_(0, tension_params(options_)) {
   mesh_.check();
   const std::size_t n = mesh_.node_count();
   auto positive = [](double v, const char* field, const char* unit) {
@@ -128,7 +138,7 @@ TissueSolver::TissueSolver(ElectroMesh mesh, TissueOptions options)
   }
   for (const StimulusSpec& s : options_.stimuli) stimuli_.emplace_back(mesh_, s);
   activation_ = ActivationTracker(rest_, options_.activation_threshold_mv);
-  tension_ = ActiveTension(n, default_tension_params(options_.tension_k_kpa));
+  tension_ = ActiveTension(n, tension_params(options_));
 
   // --- operators (reference configuration, once) ---
   mass_ = assemble_mass(mesh_);

@@ -52,6 +52,7 @@ struct TissueOptions {
   std::vector<StimulusSpec> stimuli;
   double activation_threshold_mv;  // e.g. -40 mV
   double tension_k_kpa;            // Nash–Panfilov amplitude k_tau (eq 23)
+  double tension_time_scale_ms = 12.9;  // Nash–Panfilov time unit t_scale (eq 23, tension.h)
   // Optional factor (> 0) on sigma_i and sigma_e per mesh domain (empty: 1 everywhere); a cell
   // takes the factor of its first node's domain (ours; e.g. the atrial conductivity scale).
   std::vector<double> domain_conductivity_scale = {};

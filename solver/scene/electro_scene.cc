@@ -193,6 +193,7 @@ electro::TissueOptions tissue_options(const config::Scenario& scenario, std::vec
   o.stimuli = std::move(stimuli);
   o.activation_threshold_mv = e.activation_threshold_mv;
   o.tension_k_kpa = scenario.tissue.active_tension_k_kpa;
+  o.tension_time_scale_ms = scenario.tissue.active_tension_time_scale_ms;
   o.threads = e.threads;
   return o;
 }

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -210,10 +211,17 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   config::Tissue tissue_config = scenario.tissue;
   tissue_config.lv.fung_c_pa *= em.passive_stiffness_scale;
   tissue_config.la.fung_c_pa *= em.passive_stiffness_scale;
+  if (em.isotropic_passive) {
+    tissue_config.lv.alpha_c = tissue_config.lv.alpha_f;
+    tissue_config.la.alpha_c = tissue_config.la.alpha_f;
+  }
   const structure::ShellMaterials materials = structure::materials_from_config(tissue_config);
   structure::ShellOptions shell_options;
-  shell_options.law = scenario.structure.law;
-  shell_options.bending = scenario.structure.bending;
+  shell_options.law = em.spring_law;
+  shell_options.fung_exponent_cap = scenario.structure.fung_exponent_cap;
+  shell_options.active_min_fibre_stretch = scenario.tissue.active_min_fibre_stretch;
+  shell_options.active_cross_fibre_fraction = scenario.tissue.active_cross_fibre_fraction;
+  shell_options.bending = em.bending;
   shell_options.damping_per_ms = scenario.structure.damping_per_ms;
   shell_options.time_step_safety = scenario.structure.time_step_safety;
   shell_options.strain_limit = scenario.structure.strain_limit;
@@ -227,6 +235,21 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
     c->ep_node.assign(mesh.node_count(), -1);
     for (std::size_t k = 0; k < source.size(); ++k)
       if (source[k][0] == body_index) c->ep_node[static_cast<std::size_t>(source[k][1])] = static_cast<std::int32_t>(k);
+    // The fibrous annulus (ours): nodes on the anchor ring and one edge away from it carry no
+    // active tension (the valvular plane's ring is not muscle; contracting triangles pulling on
+    // the fixed ring crumpled the edges next to it, docs/electromechanics.md).
+    if (em.passive_annulus) {
+      std::vector<char> near(mesh.node_count(), 0);
+      for (const auto& t : mesh.tri) {
+        const bool touches = std::any_of(t.begin(), t.end(), [&](std::int32_t i) {
+          return (mesh.region[static_cast<std::size_t>(i)] & geometry::kAnchor) != 0;
+        });
+        if (touches)
+          for (std::int32_t i : t) near[static_cast<std::size_t>(i)] = 1;
+      }
+      for (std::size_t i = 0; i < near.size(); ++i)
+        if (near[i]) c->ep_node[i] = -1;
+    }
     chambers.push_back(std::move(c));
   };
   add_chamber("lv", lv_mesh, 0);
@@ -347,6 +370,8 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
     frames.push_back(std::move(f));
   };
 
+  // Progress (with the LV state) every ~20 ms of simulated time (ours).
+  const long progress_every = std::max(1L, std::lround(20.0 / sync_ms));
   for (int b = 1; b <= scenario.beats; ++b) {
     const double beat_start_ms = t_ms;
     beat.clear();
@@ -362,7 +387,7 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
       scheduler.advance_to(t_ms);
       if (n % sample_every == 0 || n == intervals_this_beat) sample();
       if (want_fields && n % field_every == 0) frame();
-      if (n % std::max(1L, intervals_this_beat / 10) == 0) {
+      if (n % progress_every == 0 || n == intervals_this_beat) {
         if (control.cancel_requested()) throw Cancelled();
         ProgressReport r;
         r.simulated_time_s = t_ms * 1e-3;
@@ -370,7 +395,11 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
         r.beats_total = scenario.beats;
         r.fraction = (static_cast<double>(b - 1) + static_cast<double>(n) / static_cast<double>(intervals_this_beat)) /
                      scenario.beats;
-        r.message = "electromechanics";
+        std::ostringstream msg;
+        msg << std::setprecision(4) << "LV " << lv.constraint->pressure_mmhg() << " mmHg " << lv.volume_ml()
+            << " ml, mean LV tension " << beat.tension_lv_mean_kpa.back() << " kPa, structure step "
+            << lv.model->stable_step_ms() << " ms, largest |edge strain| " << lv.model->max_abs_strain();
+        r.message = msg.str();
         r.latest_beat_metrics = last_metrics;
         control.on_progress(r);
       }

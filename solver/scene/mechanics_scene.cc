@@ -42,6 +42,9 @@ Bodies build_bodies(const config::Scenario& s) {
   const config::Structure& st = s.structure;
   structure::ShellOptions opt;
   opt.law = st.law;
+  opt.fung_exponent_cap = st.fung_exponent_cap;
+  opt.active_min_fibre_stretch = s.tissue.active_min_fibre_stretch;
+  opt.active_cross_fibre_fraction = s.tissue.active_cross_fibre_fraction;
   opt.bending = st.bending;
   opt.damping_per_ms = st.damping_per_ms;
   opt.time_step_safety = st.time_step_safety;

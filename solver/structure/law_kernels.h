@@ -5,9 +5,10 @@
 
 namespace systole::structure::kernels {
 
-// Each law: stress(eps) and tangent(eps), and both at once (one exp for the force loop).
+// Each law: stress(eps) and tangent(eps), and both at once (one exp for the force loop). q_cap is
+// read by FungTension only.
 struct Fung {
-  static void stress_tangent(double eps, double c, double a, double& tau, double& dtau) {
+  static void stress_tangent(double eps, double c, double a, double /*q_cap*/, double& tau, double& dtau) {
     const double q = a * eps * eps;
     const double ca_e = c * a * std::exp(q);
     tau = ca_e * eps;
@@ -20,16 +21,40 @@ struct Fung {
   }
 };
 struct Linear {
-  static void stress_tangent(double eps, double c, double a, double& tau, double& dtau) {
+  static void stress_tangent(double eps, double c, double a, double /*q_cap*/, double& tau, double& dtau) {
     tau = c * a * eps;
     dtau = c * a;
   }
   static double stress(double eps, double c, double a) { return c * a * eps; }
   static double tangent(double, double c, double a) { return c * a; }
 };
+// Fung in tension only (ours, spring_law.h "fung_tension"): eq 17 for eps >= 0 until the exponent
+// q = a eps^2 reaches q_cap, then continued linearly with the tangent there (C1), so the tangent
+// is bounded by c a e^{q_cap} (1 + 2 q_cap); in compression the small-strain modulus alone,
+// tau = c a eps (a fibre that shortens does not stiffen).
+struct FungTension {
+  static void stress_tangent(double eps, double c, double a, double q_cap, double& tau, double& dtau) {
+    if (eps <= 0) {
+      tau = c * a * eps;
+      dtau = c * a;
+      return;
+    }
+    const double q = a * eps * eps;
+    if (q <= q_cap) {
+      const double ca_e = c * a * std::exp(q);
+      tau = ca_e * eps;
+      dtau = ca_e * (1 + 2 * q);
+      return;
+    }
+    const double eps_cap = std::sqrt(q_cap / a);
+    const double ca_e = c * a * std::exp(q_cap);
+    dtau = ca_e * (1 + 2 * q_cap);
+    tau = ca_e * eps_cap + dtau * (eps - eps_cap);
+  }
+};
 // lambda = l / l0 = 1 / (1 - eps); tau = (c a / 3)(lambda - lambda^-2).
 struct NeoHookean {
-  static void stress_tangent(double eps, double c, double a, double& tau, double& dtau) {
+  static void stress_tangent(double eps, double c, double a, double /*q_cap*/, double& tau, double& dtau) {
     tau = stress(eps, c, a);
     dtau = tangent(eps, c, a);
   }

@@ -69,7 +69,7 @@ double hinge_angle(const Vec3& e0, const Vec3& e1, const Vec3& o1, const Vec3& o
 // Springs: forces into f; when `row` is given, also the Gershgorin row sums of the tangent
 // stiffness (axial df/dl = C/l^2 (tau' l0/l - tau) and transverse f/l, 2 max of both per end).
 template <class Law>
-void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>& x,
+void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>& x, double q_cap,
                  Vec3* f, double* row, double limit, double& worst, std::int32_t& worst_edge,
                  std::int32_t& bad_edge, std::int32_t k0 = 0, std::int32_t k1 = -1) {
   const std::int32_t n = k1 < 0 ? static_cast<std::int32_t>(springs.size()) : k1;
@@ -79,7 +79,7 @@ void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>
     const double l = d.norm();
     const double eps = 1 - s.rest_length_mm / l;
     double tau, dtau;
-    Law::stress_tangent(eps, s.c_kpa, s.alpha, tau, dtau);
+    Law::stress_tangent(eps, s.c_kpa, s.alpha, q_cap, tau, dtau);
     const double c_l2 = s.cross_section_mm3 / (l * l);
     const Vec3 fv = (tau * c_l2) * d;  // on i, towards j when stretched
     f[s.i] += fv;
@@ -146,6 +146,14 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
     throw InputError(body + ": time_step_safety = " + fmt(options.time_step_safety) + " must be in (0, 1]");
   if (!(options.strain_limit > 0 && options.strain_limit < 1))
     throw InputError(body + ": strain_limit = " + fmt(options.strain_limit) + " must be in (0, 1)");
+  if (!(options.active_min_fibre_stretch >= 0 && options.active_min_fibre_stretch < 1))
+    throw InputError(body + ": tissue.active_min_fibre_stretch = " + fmt(options.active_min_fibre_stretch) +
+                     " must be in [0, 1)");
+  if (!(options.active_cross_fibre_fraction >= 0 && options.active_cross_fibre_fraction <= 1))
+    throw InputError(body + ": tissue.active_cross_fibre_fraction = " + fmt(options.active_cross_fibre_fraction) +
+                     " must be in [0, 1]");
+  if (!(options.fung_exponent_cap > 0))
+    throw InputError(body + ": structure.fung_exponent_cap = " + fmt(options.fung_exponent_cap) + " must be > 0");
   if (!(options.damping_per_ms >= 0))
     throw InputError(body + ": damping_per_ms = " + fmt(options.damping_per_ms) + " must be >= 0");
   if (options.threads < 1 || options.threads > 256)
@@ -253,17 +261,21 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
     const Vec3 e1 = mesh_.position_mm[tr[1]] - mesh_.position_mm[tr[0]];
     const Vec3 e2 = mesh_.position_mm[tr[2]] - mesh_.position_mm[tr[0]];
     Vec3 f0 = mesh_.fibre[t];
-    double w0 = 0, w1 = 0;
+    double w0 = 0, w1 = 0, v0 = 0, v1 = 0;
     if (f0.norm() > 0) {
       const Vec3 n = e1.cross(e2).normalized();
       f0 = (f0 - f0.dot(n) * n).normalized();  // tangent, unit
+      const Vec3 c0 = n.cross(f0);              // the cross-fibre direction in the plane
       const double g11 = e1.dot(e1), g12 = e1.dot(e2), g22 = e2.dot(e2);
       const double det = g11 * g22 - g12 * g12;
       const double r1 = e1.dot(f0), r2 = e2.dot(f0);
       w0 = (g22 * r1 - g12 * r2) / det;
       w1 = (g11 * r2 - g12 * r1) / det;
+      const double q1 = e1.dot(c0), q2 = e2.dot(c0);
+      v0 = (g22 * q1 - g12 * q2) / det;
+      v1 = (g11 * q2 - g12 * q1) / det;
     }
-    active_.push_back({tr[0], tr[1], tr[2], w0, w1, mesh_.thickness_mm[t] * area[t]});
+    active_.push_back({tr[0], tr[1], tr[2], w0, w1, v0, v1, mesh_.thickness_mm[t] * area[t]});
   }
   active_tension_kpa_.assign(nn, 0.0);
 
@@ -338,11 +350,15 @@ void ShellModel::add_spring_forces(const std::vector<Vec3>& x, std::vector<Vec3>
   double worst = 0;
   std::int32_t we = -1, bad = -1;
   const double inf = std::numeric_limits<double>::infinity();
+  const double q = options_.fung_exponent_cap;
   switch (law_->kind) {
-    case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x, f.data(), nullptr, inf, worst, we, bad); break;
-    case LawKind::kLinear: spring_loop<kernels::Linear>(springs_, x, f.data(), nullptr, inf, worst, we, bad); break;
+    case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x, q, f.data(), nullptr, inf, worst, we, bad); break;
+    case LawKind::kLinear: spring_loop<kernels::Linear>(springs_, x, q, f.data(), nullptr, inf, worst, we, bad); break;
     case LawKind::kNeoHookean:
-      spring_loop<kernels::NeoHookean>(springs_, x, f.data(), nullptr, inf, worst, we, bad);
+      spring_loop<kernels::NeoHookean>(springs_, x, q, f.data(), nullptr, inf, worst, we, bad);
+      break;
+    case LawKind::kFungTension:
+      spring_loop<kernels::FungTension>(springs_, x, q, f.data(), nullptr, inf, worst, we, bad);
       break;
   }
 }
@@ -351,7 +367,7 @@ double ShellModel::spring_energy(const std::vector<Vec3>& x) const {
   double w = 0;
   for (const EdgeSpring& s : springs_) {
     const double l = (x[s.j] - x[s.i]).norm();
-    w += edge_energy(*law_, 1 - s.rest_length_mm / l, s.c_kpa, s.alpha, s.cross_section_mm3);
+    w += edge_energy(*law_, 1 - s.rest_length_mm / l, s.c_kpa, s.alpha, options_.fung_exponent_cap, s.cross_section_mm3);
   }
   return w;
 }
@@ -374,26 +390,56 @@ double ShellModel::bending_energy(const std::vector<Vec3>& x) const {
   return w;
 }
 
+namespace {
+// Length–tension relation of the active stress (ours, options.active_min_fibre_stretch = m > 0):
+// the tension is tau f(lambda) with f = 1 for lambda >= 1, f = 1 - ((1 - lambda)/(1 - m))^2 on
+// [m, 1] and f = 0 below m; g is its primitive with g(1) = 1, so W_act = tau s A g(lambda).
+// m = 0: f = 1, g = lambda (eq 24 as in the seed, no length dependence).
+struct LengthTension {
+  double f, df, g;
+};
+LengthTension length_tension(double lambda, double m) {
+  if (m <= 0 || lambda >= 1) return {1, 0, lambda};
+  const double d = 1 - m;
+  if (lambda <= m) return {0, 0, m + d / 3};
+  const double r = (1 - lambda) / d;
+  return {1 - r * r, 2 * r / d, lambda + (1 - lambda) * r * r / 3};
+}
+}  // namespace
+
 void ShellModel::add_active_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f) const {
   if (!active_on_) return;
+  const double kc = options_.active_cross_fibre_fraction;
+  // one direction d0 = w0 (X_b - X_a) + w1 (X_c - X_a) with weight k: W = k tau s A g(|F d0|)
+  auto add = [&](const ActiveTriangle& t, double w0, double w1, double k_tau) {
+    const Vec3 ff = w0 * (x[t.b] - x[t.a]) + w1 * (x[t.c] - x[t.a]);  // F d0
+    const double lam = ff.norm();
+    const double fl = length_tension(lam, options_.active_min_fibre_stretch).f;
+    const Vec3 u = (k_tau * fl * t.volume_mm3 / lam) * ff;  // dW/d(F d0)
+    f[t.b] -= w0 * u;
+    f[t.c] -= w1 * u;
+    f[t.a] += (w0 + w1) * u;
+  };
   for (const ActiveTriangle& t : active_) {
     const double tau = (active_tension_kpa_[t.a] + active_tension_kpa_[t.b] + active_tension_kpa_[t.c]) / 3;
     if (tau == 0 || (t.w0 == 0 && t.w1 == 0)) continue;
-    const Vec3 ff = t.w0 * (x[t.b] - x[t.a]) + t.w1 * (x[t.c] - x[t.a]);  // F f0
-    const double lam = ff.norm();
-    const Vec3 u = (tau * t.volume_mm3 / lam) * ff;  // dW/d(F f0)
-    f[t.b] -= t.w0 * u;
-    f[t.c] -= t.w1 * u;
-    f[t.a] += (t.w0 + t.w1) * u;
+    add(t, t.w0, t.w1, tau);
+    if (kc > 0) add(t, t.v0, t.v1, kc * tau);
   }
 }
 
 double ShellModel::active_energy(const std::vector<Vec3>& x) const {
   double w = 0;
+  const double m = options_.active_min_fibre_stretch, kc = options_.active_cross_fibre_fraction;
   for (const ActiveTriangle& t : active_) {
     const double tau = (active_tension_kpa_[t.a] + active_tension_kpa_[t.b] + active_tension_kpa_[t.c]) / 3;
-    if (tau == 0) continue;
-    w += tau * t.volume_mm3 * (t.w0 * (x[t.b] - x[t.a]) + t.w1 * (x[t.c] - x[t.a])).norm();
+    if (tau == 0 || (t.w0 == 0 && t.w1 == 0)) continue;
+    const double lam = (t.w0 * (x[t.b] - x[t.a]) + t.w1 * (x[t.c] - x[t.a])).norm();
+    w += tau * t.volume_mm3 * length_tension(lam, m).g;
+    if (kc > 0) {
+      const double lc = (t.v0 * (x[t.b] - x[t.a]) + t.v1 * (x[t.c] - x[t.a])).norm();
+      w += kc * tau * t.volume_mm3 * length_tension(lc, m).g;
+    }
   }
   return w;
 }
@@ -419,13 +465,17 @@ void ShellModel::internal_forces_range(Vec3* f, double* row, std::int32_t s0, st
                                        std::int32_t h1, double& worst, std::int32_t& worst_edge,
                                        std::int32_t& bad) const {
   const double lim = options_.strain_limit;
+  const double q = options_.fung_exponent_cap;
   switch (law_->kind) {
-    case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x_, f, row, lim, worst, worst_edge, bad, s0, s1); break;
+    case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1); break;
     case LawKind::kLinear:
-      spring_loop<kernels::Linear>(springs_, x_, f, row, lim, worst, worst_edge, bad, s0, s1);
+      spring_loop<kernels::Linear>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1);
       break;
     case LawKind::kNeoHookean:
-      spring_loop<kernels::NeoHookean>(springs_, x_, f, row, lim, worst, worst_edge, bad, s0, s1);
+      spring_loop<kernels::NeoHookean>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1);
+      break;
+    case LawKind::kFungTension:
+      spring_loop<kernels::FungTension>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1);
       break;
   }
   // Bending, with the hinges' Gershgorin rows: k_b (|cos| + |sin|)(theta - theta0) |g_a| sum_b |g_b|
@@ -507,12 +557,25 @@ void ShellModel::compute_forces() {
       const double tau = (active_tension_kpa_[t.a] + active_tension_kpa_[t.b] + active_tension_kpa_[t.c]) / 3;
       if (tau == 0) continue;
       const double lam = (t.w0 * (x_[t.b] - x_[t.a]) + t.w1 * (x_[t.c] - x_[t.a])).norm();
-      const double k = std::abs(tau) * t.volume_mm3 / lam;
+      const LengthTension lt = length_tension(lam, options_.active_min_fibre_stretch);
+      // transverse tau f / lambda and axial tau f' (the length-tension slope)
+      const double k = std::abs(tau) * t.volume_mm3 * std::max(lt.f / lam, lt.df);
       const double w[3] = {std::abs(t.w0 + t.w1), std::abs(t.w0), std::abs(t.w1)};
       const double sum = w[0] + w[1] + w[2];
       row[t.a] += k * w[0] * sum;
       row[t.b] += k * w[1] * sum;
       row[t.c] += k * w[2] * sum;
+      if (options_.active_cross_fibre_fraction > 0) {
+        const double lc = (t.v0 * (x_[t.b] - x_[t.a]) + t.v1 * (x_[t.c] - x_[t.a])).norm();
+        const LengthTension ltc = length_tension(lc, options_.active_min_fibre_stretch);
+        const double kc = options_.active_cross_fibre_fraction * std::abs(tau) * t.volume_mm3 *
+                          std::max(ltc.f / lc, ltc.df);
+        const double v[3] = {std::abs(t.v0 + t.v1), std::abs(t.v0), std::abs(t.v1)};
+        const double vs = v[0] + v[1] + v[2];
+        row[t.a] += kc * v[0] * vs;
+        row[t.b] += kc * v[1] * vs;
+        row[t.c] += kc * v[2] * vs;
+      }
     }
   }
   add_pressure_forces(x_, force_);

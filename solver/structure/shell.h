@@ -19,7 +19,9 @@
 //     on each triangle, acts as a contractile stress along the triangle's fibre:
 //     W_act = sum_T tau_act s_T A_T lambda_f, lambda_f = |F f0| the fibre stretch. Its nodal
 //     forces have eq 24's magnitude (tau s l) but sum to zero with zero torque, unlike the
-//     literal eq 24 (a force along e_f at every node, which pushes a whole body);
+//     literal eq 24 (a force along e_f at every node, which pushes a whole body); optionally
+//     scaled by a length-tension factor f(lambda_f) (ShellOptions::active_min_fibre_stretch, ours),
+//     and with a cross-fibre fraction k: + k tau s A g(lambda_c) (active_cross_fibre_fraction, ours);
 //   - cavity pressure p (kPa, follower load): -p A_T n_T / 3 on each node of triangle T
 //     (normals into the cavity, so p > 0 inflates), = p dV/dx for a closed surface;
 //   - external nodal loads (mN) from the caller, held constant during advance().
@@ -55,6 +57,12 @@ ShellMaterials materials_from_config(const config::Tissue& tissue);
 
 struct ShellOptions {
   std::string law = "fung";        // spring_laws() name
+  double fung_exponent_cap = 4;    // law "fung_tension": the largest exponent a eps^2 (ours)
+  double active_min_fibre_stretch = 0;  // length-tension (ours): the active stress is tau f(lambda_f),
+                                        // f = 1 - ((1 - lambda)/(1 - m))^2 on [m, 1], 0 below m,
+                                        // 1 above 1; 0: f = 1 (the seed's eq 24)
+  double active_cross_fibre_fraction = 0;  // (ours) a cross-fibre active stress k tau along
+                                           // c0 = n x f0 besides the fibre's; 0: the seed's
   bool bending = true;
   double damping_per_ms = 0;       // gamma, mass-proportional
   double time_step_safety = 0.9;   // reported stable step = safety * 2 / omega_bound
@@ -218,6 +226,7 @@ class ShellModel {
   struct ActiveTriangle {
     std::int32_t a, b, c;
     double w0, w1;          // reference fibre f0 = w0 (X_b - X_a) + w1 (X_c - X_a)
+    double v0, v1;          // reference cross-fibre c0 = n x f0, the same way
     double volume_mm3;      // s A (stress-free)
   };
   void compute_forces();  // force_ at x_, records the worst strain

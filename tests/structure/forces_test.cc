@@ -176,10 +176,10 @@ TEST(StructureForces, AlphaPhiAndLawsAgreeAtSmallStrain) {
   EXPECT_DOUBLE_EQ(alpha_phi(49.56, 5.29, 1.0), 49.56);
   EXPECT_DOUBLE_EQ(alpha_phi(49.56, 5.29, 0.0), 5.29);
   for (const auto& law : spring_laws()) {
-    EXPECT_NEAR(law.tangent(0, 0.0133, 49.56), 0.0133 * 49.56, 1e-12) << law.name;
+    EXPECT_NEAR(law.tangent(0, 0.0133, 49.56, 4.0), 0.0133 * 49.56, 1e-12) << law.name;
     const double h = 1e-6;
-    EXPECT_NEAR((law.stress(0.2 + h, 0.0133, 49.56) - law.stress(0.2 - h, 0.0133, 49.56)) / (2 * h),
-                law.tangent(0.2, 0.0133, 49.56), 1e-6)
+    EXPECT_NEAR((law.stress(0.2 + h, 0.0133, 49.56, 4.0) - law.stress(0.2 - h, 0.0133, 49.56, 4.0)) / (2 * h),
+                law.tangent(0.2, 0.0133, 49.56, 4.0), 1e-6)
         << law.name;
   }
 }
@@ -191,7 +191,7 @@ TEST(StructureInput, UnknownLawListsTheKnownOnes) {
     ShellModel body(flat_sheet(3, 3, 1, 1, Tissue::kMitralLeaflet, {1, 0, 0}), seed_materials(), opt);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown spring law 'hooke'; known: fung, linear, neo_hookean"),
+    EXPECT_NE(std::string(e.what()).find("unknown spring law 'hooke'; known: fung, linear, neo_hookean, fung_tension"),
               std::string::npos)
         << e.what();
   }
@@ -319,6 +319,80 @@ TEST(StructureConstraints, DisplacementLimiterHoldsTheLeaflet) {
   EXPECT_GT(deepest(limited), -0.1);  // released: the leaflet moves back up
   std::cout << "  deepest node: free " << deepest(free_body) << " mm, limited (0.5 mm) then released "
             << deepest(limited) << " mm\n";
+}
+
+}  // namespace
+}  // namespace systole::structure
+
+namespace systole::structure {
+namespace {
+using geometry::Tissue;
+
+// fung_tension (ours): eq 17 in tension below the exponent cap, its tangent continued linearly
+// beyond (C1, bounded), and the small-strain modulus alone in compression.
+TEST(StructureForces, FungTensionIsFungInTensionBoundedAndLinearInCompression) {
+  const SpringLaw& law = find_spring_law("fung_tension");
+  const SpringLaw& fung = find_spring_law("fung");
+  const double c = 0.0133, a = 49.56, q_cap = 4;
+  const double eps_cap = std::sqrt(q_cap / a);
+  for (double e : {0.01, 0.1, 0.2, eps_cap})
+    EXPECT_NEAR(law.stress(e, c, a, q_cap), fung.stress(e, c, a, q_cap), 1e-12 * fung.stress(e, c, a, q_cap)) << e;
+  for (double e : {-0.05, -0.3, -0.6}) {
+    EXPECT_DOUBLE_EQ(law.stress(e, c, a, q_cap), c * a * e);
+    EXPECT_DOUBLE_EQ(law.tangent(e, c, a, q_cap), c * a);
+  }
+  const double k_max = c * a * std::exp(q_cap) * (1 + 2 * q_cap);
+  const double h = 1e-7;
+  EXPECT_NEAR(law.stress(eps_cap + h, c, a, q_cap) - law.stress(eps_cap - h, c, a, q_cap), 2 * h * k_max,
+              1e-4 * 2 * h * k_max);  // C1 at the cap
+  for (double e : {eps_cap + 0.01, 0.5, 0.9}) EXPECT_DOUBLE_EQ(law.tangent(e, c, a, q_cap), k_max) << e;
+  EXPECT_LT(law.stress(0.5, c, a, q_cap), fung.stress(0.5, c, a, q_cap));
+}
+
+// Length-tension (ours, ShellOptions::active_min_fibre_stretch = m): the active forces stay minus
+// the gradient of W = tau s A g(lambda) across the branches lambda < m, [m, 1], > 1, and vanish
+// on a sheet shortened along its fibres below m.
+TEST(StructureForces, LengthTensionActiveForcesAreMinusTheEnergyGradientAndVanishBelowTheMinimum) {
+  ShellOptions opt;
+  opt.active_min_fibre_stretch = 0.8;
+  for (const auto& mesh : test_meshes()) {
+    ShellModel body(mesh, seed_materials(), opt);
+    std::vector<double> tension(mesh.node_count());
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0, 50);
+    for (auto& t : tension) t = u(rng);
+    body.set_active_tension(tension);
+    std::vector<Vec3> x = mesh.position_mm;
+    for (auto& p : x) p *= 0.88;  // fibre stretches spread over the three branches
+    x = perturbed(x, 0.25, 9);
+    const double mismatch = gradient_mismatch(
+        x, [&](const auto& y) { return body.active_energy(y); },
+        [&](const auto& y, auto& f) { body.add_active_forces(y, f); }, 1e-6);
+    EXPECT_LT(mismatch, 1e-5) << mesh.name;
+    std::vector<Vec3> f(x.size(), Vec3::Zero());
+    body.add_active_forces(x, f);
+    expect_no_net_force_or_torque(x, f, "active, length-tension");
+  }
+  // A sheet with fibres along x shortened uniformly to lambda = 0.75 < m along x: no active force.
+  const auto sheet = flat_sheet(5, 5, 1.0, 1.0, Tissue::kLvMyocardium, {1, 0, 0});
+  ShellModel body(sheet, seed_materials(), opt);
+  body.set_active_tension(std::vector<double>(sheet.node_count(), 40.0));
+  std::vector<Vec3> x = sheet.position_mm;
+  for (auto& p : x) p.x() *= 0.75;
+  std::vector<Vec3> f(x.size(), Vec3::Zero());
+  body.add_active_forces(x, f);
+  double fmax = 0;
+  for (const auto& v : f) fmax = std::max(fmax, v.norm());
+  EXPECT_EQ(fmax, 0.0);
+  // and at lambda = 0.9 (f = 1 - (0.1 / 0.2)^2 = 0.75) the force is 0.75 of the seed's form
+  ShellModel seed_form(sheet, seed_materials(), ShellOptions{});
+  seed_form.set_active_tension(std::vector<double>(sheet.node_count(), 40.0));
+  x = sheet.position_mm;
+  for (auto& p : x) p.x() *= 0.9;
+  std::vector<Vec3> f1(x.size(), Vec3::Zero()), f0(x.size(), Vec3::Zero());
+  body.add_active_forces(x, f1);
+  seed_form.add_active_forces(x, f0);
+  for (std::size_t i = 0; i < x.size(); ++i) EXPECT_NEAR((f1[i] - 0.75 * f0[i]).norm(), 0, 1e-12 * (1 + f0[i].norm()));
 }
 
 }  // namespace
