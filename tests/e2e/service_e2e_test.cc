@@ -95,12 +95,13 @@ TEST_F(ServiceE2E, HealthyJobSucceedsWithResultsAndVerifiedArtifacts) {
 }
 
 TEST_F(ServiceE2E, ElectromechanicsJobRunsOnTheWorkersWithPerBeatMetricsAndFields) {
-  // A short, coarse electromechanics job (issue #8): 2 beats of 250 ms on the 4 mm heart.
+  // A short, coarse electromechanics job (issue #8): 2 beats of 250 ms on the 3 mm heart (the
+  // calibrated wall crumples at 0.49 s on the 4 mm mesh: docs/electromechanics.md).
   const nlohmann::json scenario{{"scene", "electromechanics"},
                                 {"beats", 2},
                                 {"periodicity_tolerance", 0},
                                 {"heart_rate_bpm", 240},
-                                {"geometry", {{"target_edge_mm", 4}}},
+                                {"geometry", {{"target_edge_mm", 3}}},
                                 {"electro", {{"model", "monodomain"}, {"time_step_ms", 0.1}}},
                                 {"electromechanics", {{"la_chamber", "lumped"}, {"field_interval_ms", 50}}}};
   const std::string id = submit(*server_, scenario);
