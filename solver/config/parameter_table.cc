@@ -99,14 +99,14 @@ std::vector<Param> build_table() {
                                     "Tissue density, every body (seed)."));
   t.push_back(SYSTOLE_REAL(tissue.poisson_ratio, "", 0.5, 0, 0.5,
                            "Poisson ratio nu_m in the bending stiffness (eq 19)."));
-  t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 110, 0, 1000,
+  t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 270, 0, 1000,
                            "Nash-Panfilov active tension amplitude k_tau (Nash & Panfilov 2004: "
-                           "47.9 kPa); 110 calibrated by the electromechanics scene (docs/electromechanics.md)."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.active_tension_time_scale_ms, "ms", 3, 0, 1000,
+                           "47.9 kPa); 270 calibrated by the electromechanics scene (docs/electromechanics.md)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.active_tension_time_scale_ms, "ms", 20, 0, 1000,
                                     "Nash-Panfilov time unit t_scale (eq 23): the tension rises with time constant "
-                                    "10 t_scale and relaxes with t_scale (Nash & Panfilov 2004: 12.9 ms; 3 ms "
+                                    "10 t_scale and relaxes with t_scale (Nash & Panfilov 2004: 12.9 ms; 20 ms "
                                     "calibrated by the electromechanics scene, ours)."));
-  t.push_back(SYSTOLE_REAL(tissue.active_min_fibre_stretch, "", 0.6, 0, 0.99,
+  t.push_back(SYSTOLE_REAL(tissue.active_min_fibre_stretch, "", 0.5, 0, 0.99,
                            "Length-tension relation of the active fibre stress (ours): the tension is "
                            "tau f(lambda), f = 1 - ((1 - lambda)/(1 - m))^2 between this stretch m and 1, 0 below "
                            "m, 1 above 1; 0: no length dependence (the seed's eq 24)."));
@@ -380,6 +380,9 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.fung_exponent_cap, "", 4, 0, 100,
                                     "Law 'fung_tension': the largest Fung exponent alpha eps^2; beyond it the stress "
                                     "grows linearly with the tangent there (ours; bounds the explicit stable step)."));
+  t.push_back(SYSTOLE_REAL(structure.fung_compression_fraction, "", 0.008, 0, 1,
+                           "Law 'fung_tension': in compression the stress is c alpha eps plus this fraction of the "
+                           "capped Fung law's stiffening (ours; 0: linear, 1: the capped Fung law both ways)."));
   t.push_back(SYSTOLE_CHOICE(structure.body, "sphere",
                              (std::vector<std::string_view>{"sphere", "sheet", "left_heart", "lv", "mitral_leaflets"}),
                              "Scene 'mechanics': the body - a closed spherical shell, a square sheet clamped on its "
@@ -465,16 +468,17 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.sync_step_ms, "ms", 1, 0, 20,
                                     "Scene 'electromechanics': synchronisation step of the multirate scheduler "
                                     "(a multiple of electro.time_step_ms; each module sub-cycles inside it)."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.passive_stiffness_scale, "", 30, 0, 1e4,
+  t.push_back(SYSTOLE_POSITIVE_REAL(electromechanics.passive_stiffness_scale, "", 60, 0, 1e4,
                                     "Scene 'electromechanics': factor on the LV and LA Fung c (ours; calibrated: "
                                     "docs/electromechanics.md)."));
   t.push_back(SYSTOLE_CHOICE(electromechanics.la_chamber, "lumped",
                              (std::vector<std::string_view>{"lumped", "shell"}),
                              "Scene 'electromechanics': the LA as the 0-D elastance chamber or as a 3-D shell wall "
                              "(experimental: the constraint does not hold it yet, docs/electromechanics.md)."));
-  t.push_back(SYSTOLE_BOOL(electromechanics.passive_annulus, true,
-                           "Scene 'electromechanics': nodes on the valvular plane's anchor ring and one edge from it "
-                           "carry no active tension (ours: the fibrous annulus is not muscle)."));
+  t.push_back(SYSTOLE_REAL(electromechanics.passive_annulus_mm, "mm", 6, 0, 50,
+                           "Scene 'electromechanics': wall nodes within this distance (stress-free) of the valvular "
+                           "plane's anchor ring carry no active tension (ours: the fibrous annulus is not muscle); "
+                           "0: none."));
   t.push_back(SYSTOLE_CHOICE(electromechanics.spring_law, "fung_tension",
                              (std::vector<std::string_view>{"fung", "linear", "neo_hookean", "fung_tension"}),
                              "Scene 'electromechanics': in-plane spring law of the LV and LA walls, used instead of "

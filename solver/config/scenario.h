@@ -159,6 +159,7 @@ struct Structure {
   bool mitral_limiter;                  // body "mitral_leaflets": the seed's displacement limiter
   double mitral_limit_mm;
   double fung_exponent_cap;             // law "fung_tension": largest a eps^2 (ours)
+  double fung_compression_fraction;     // law "fung_tension": Fung stiffening kept in compression (ours)
 };
 
 // Scene "ibm": immersed-boundary verification flows (solver/scene/ibm_scene.h), nondimensional
@@ -187,7 +188,7 @@ struct Electromechanics {
   double passive_stiffness_scale;  // factor on the LV and LA Fung c in this scene (ours)
   std::string la_chamber;          // "shell" or "lumped"
   double field_interval_ms;        // node fields over the last beat; 0: none
-  bool passive_annulus;            // no active tension within one edge of the anchor ring (ours)
+  double passive_annulus_mm;       // no active tension within this distance of the anchor ring (ours)
   std::string spring_law;          // the chamber walls' law in this scene (instead of structure.law)
   bool bending;                    // bending on the chamber walls (instead of structure.bending)
   bool isotropic_passive;          // alpha_c = alpha_f for the LV and LA in this scene (ours)

@@ -56,7 +56,8 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     grid::exchange_halos(work, slabs_);
   };
   // Pass 1 (eq 3): F = (V_b − û(X_b))/Δt, spread (eq 6).
-  std::vector<Vec3> U = transfer_.interpolate(u_hat);
+  std::vector<Vec3>& U = interpolated_;
+  transfer_.interpolate(u_hat, U);
   for (Vec3& x : U) x += dt * uniform_force;
   report_.slip_before = slip_of(U);
   if (par_.carry_over && previous_.size() == n) {
@@ -66,7 +67,7 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     update(u_hat.u, f.u, *work_u_);
     update(u_hat.v, f.v, *work_v_);
     update(u_hat.w, f.w, *work_w_);
-    U = transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_});
+    transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_}, U);
     for (Vec3& x : U) x += dt * uniform_force;
   }
   report_.slip_after = report_.slip_before;
@@ -81,7 +82,7 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     update(u_hat.u, f.u, *work_u_);
     update(u_hat.v, f.v, *work_v_);
     update(u_hat.w, f.w, *work_w_);
-    U = transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_});
+    transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_}, U);
     for (Vec3& x : U) x += dt * uniform_force;
     report_.slip_after = slip_of(U);
   }

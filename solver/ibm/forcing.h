@@ -69,7 +69,7 @@ class DirectForcing {
   const Markers& markers_;
   ForcingParameters par_;
   Transfer transfer_;
-  std::vector<Vec3> force_, increment_, previous_;
+  std::vector<Vec3> force_, increment_, previous_, interpolated_;
   ForcingReport report_;
   // Work velocity û + Δt f of the multi-direct passes (allocated when iterations > 1).
   std::unique_ptr<grid::XFaceField> work_u_;

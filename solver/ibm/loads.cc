@@ -2,40 +2,40 @@
 
 #include <mpi.h>
 
+#include <array>
+
 namespace systole::ibm {
 
 using grid::Location;
-
-namespace {
-// Gradient of one field at X from the analytic MLS derivatives, into row `row` of the buffer.
-template <grid::Location L>
-void gradient_row(const grid::Field<L>& f, const MlsGradientStencil& s, double* out) {
-  for (int d = 0; d < 3; ++d) out[d] = apply_stencil(f, s, s.dphi[d]);
-}
-}  // namespace
 
 ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
                   const std::vector<Vec3>& points) {
   const grid::Grid& g = transfer.slabs().grid();
   const std::size_t n = points.size();
   // 10 values per point: p, then ∂u/∂x_j, ∂v/∂x_j, ∂w/∂x_j.
-  std::vector<double> local(10 * n, 0.0), global(10 * n, 0.0);
+  std::vector<double> local(10 * n, 0.0), global(transfer.slabs().size() > 1 ? 10 * n : 0, 0.0);
   // Each point writes its own row: threads over points, no races.
 #pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(n) >= kThreadedMarkers)
   for (std::ptrdiff_t qq = 0; qq < static_cast<std::ptrdiff_t>(n); ++qq) {
     const std::size_t q = static_cast<std::size_t>(qq);
     double* row = local.data() + 10 * q;
-    const MlsStencil sp = mls_stencil(g, Location::cell, points[q]);
-    if (transfer.owns_plane(sp.k_centre)) row[0] = apply_stencil(p, sp, sp.phi);
-    const MlsGradientStencil su = mls_gradient_stencil(g, Location::x_face, points[q]);
-    if (transfer.owns_plane(su.k_centre)) gradient_row(u.u, su, row + 1);
-    const MlsGradientStencil sv = mls_gradient_stencil(g, Location::y_face, points[q]);
-    if (transfer.owns_plane(sv.k_centre)) gradient_row(u.v, sv, row + 4);
-    const MlsGradientStencil sw = mls_gradient_stencil(g, Location::z_face, points[q]);
-    if (transfer.owns_plane(sw.k_centre)) gradient_row(u.w, sw, row + 7);
+    // The four locations share their 1-D weights; φ and ∂φ are contracted with the fields
+    // row by row (mls.h, mls_point / mls_contract).
+    const MlsPoint P = mls_point(g, points[q], true);
+    if (transfer.owns_plane(mls_k_centre<Location::cell>(P)))
+      row[0] = mls_contract<Location::cell, false>(p, P, nullptr);
+    if (transfer.owns_plane(mls_k_centre<Location::x_face>(P)))
+      (void)mls_contract<Location::x_face, true>(u.u, P, row + 1);
+    if (transfer.owns_plane(mls_k_centre<Location::y_face>(P)))
+      (void)mls_contract<Location::y_face, true>(u.v, P, row + 4);
+    if (transfer.owns_plane(mls_k_centre<Location::z_face>(P)))
+      (void)mls_contract<Location::z_face, true>(u.w, P, row + 7);
   }
-  MPI_Allreduce(local.data(), global.data(), static_cast<int>(local.size()), MPI_DOUBLE, MPI_SUM,
-                transfer.slabs().comm());
+  if (transfer.slabs().size() > 1)
+    MPI_Allreduce(local.data(), global.data(), static_cast<int>(local.size()), MPI_DOUBLE, MPI_SUM,
+                  transfer.slabs().comm());
+  else
+    global.swap(local);
   ProbeValues out;
   out.pressure.resize(n);
   out.velocity_gradient.resize(n);
@@ -57,6 +57,7 @@ MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, 
   // Probes: "+" side for every active marker, "−" side for two-sided bodies.
   std::vector<Vec3> points;
   std::vector<std::ptrdiff_t> plus(n, -1), minus(n, -1);
+  points.reserve(n);
   for (std::size_t b = 0; b < n; ++b) {
     if (!markers.active(b)) continue;
     plus[b] = static_cast<std::ptrdiff_t>(points.size());

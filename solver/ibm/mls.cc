@@ -2,8 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
-
-#include <Eigen/Dense>
+#include <string>
 
 namespace systole::ibm {
 
@@ -21,156 +20,201 @@ double mls_weight_derivative(double r) {
 
 namespace {
 
-struct Geometry1d {
-  double spacing, offset;  // node i at (i + offset)·spacing
-};
+using grid::Location;
 
-// The support, weights and basis values of X for location L: the shared first half of both
-// stencils. The weight is a tensor product, W_k = w_x(a) w_y(b) w_z(c), so everything is kept
-// per direction (3 values each) and the moment matrix A = Σ W_k p_k p_kᵀ is assembled from 1-D
-// sums (ours, for cost: 3×3 one-dimensional sums instead of 27 outer products):
-//   S_d^m = Σ_a w_d(a) δ_d(a)^m  →  A_00 = S_x⁰S_y⁰S_z⁰, A_0x = S_x¹S_y⁰S_z⁰,
-//   A_xy = S_x¹S_y¹S_z⁰, A_xx = S_x²S_y⁰S_z⁰, …
-// Nodes outside the fluid in z get w_z = 0 (they drop out of every sum and of φ).
-// delta[d][a] = (x_a,d − X_d)/Δ_d (cells).
-struct Support {
-  MlsStencil s;
-  double delta[3][3]{}, w[3][3]{};
-  Eigen::Matrix4d A_inverse;
+// One direction of a support for one node offset (face: 0, centre: ½), in closed form (mls.h):
+// normalised weights ŵ(a), g(a) = m(δ(a) − m)/v and, when asked, their derivatives with respect
+// to X_d (grid units). δ(a) = (first + a + offset) − X_d/Δ_d in cells.
+using Axis = MlsAxis;
+
+[[noreturn]] void singular(const Eigen::Vector3d& X) {
+  throw std::logic_error("ibm MLS: singular moment matrix at (" + std::to_string(X[0]) + ", " + std::to_string(X[1]) +
+                         ", " + std::to_string(X[2]) + "): the point is too close to a wall");
+}
+
+// The weight and its derivative for 0 ≤ r ≤ 1 without branches (ours, for cost: the two
+// outer nodes of a support have r ∈ [¼, ¾], so a branch on r ≤ ½ is mispredicted half the time).
+inline void weight_branchless(double r, double& w, double& dw) {
+  const double s = 1 - r;
+  const double inner = 2.0 / 3.0 - 4 * r * r + 4 * r * r * r, outer = 4.0 / 3.0 * s * s * s;
+  const double d_inner = -8 * r + 12 * r * r, d_outer = -4 * s * s;
+  const double in = static_cast<double>(r <= 0.5);  // 1 or 0: an arithmetic select (no branch)
+  w = outer + in * (inner - outer);
+  dw = d_outer + in * (d_inner - d_outer);
+}
+
+// valid_lo/hi: node indices inside the fluid (the others get weight 0); periodic directions
+// pass the whole int range.
+template <bool kDerivatives>
+bool axis(double xc, double inv_spacing, double offset, int valid_lo, int valid_hi, Axis& out) {
+  // xc = X_d/Δ_d (the caller divides once per direction); inv_spacing = 1/Δ_d.
+  const int centre = mls_nearest(xc - offset);
+  out.first = centre - 1;
+  double delta[3], w[3], dw[3] = {0, 0, 0};
+  double s0 = 0, ds0 = 0;
+  const double dr = -inv_spacing / kMlsRadiusCells;  // ∂r/∂X_d for δ > 0 (sign(δ) below)
+  for (int a = 0; a < 3; ++a) {
+    const int idx = out.first + a;
+    delta[a] = (idx + offset) - xc;
+    const bool valid = idx >= valid_lo && idx <= valid_hi;
+    double wa, dwa;
+    weight_branchless(std::abs(delta[a]) / kMlsRadiusCells, wa, dwa);
+    w[a] = valid ? wa : 0.0;
+    if constexpr (kDerivatives) {
+      const double sign = delta[a] > 0 ? 1.0 : (delta[a] < 0 ? -1.0 : 0.0);
+      dw[a] = valid ? dwa * sign * dr : 0.0;
+      ds0 += dw[a];
+    }
+    s0 += w[a];
+  }
+  if (!(s0 > 0)) return false;
+  const double inv_s0 = 1.0 / s0;
+  double m = 0, q = 0;
+  for (int a = 0; a < 3; ++a) {
+    out.w[a] = w[a] * inv_s0;
+    m += out.w[a] * delta[a];
+    q += out.w[a] * delta[a] * delta[a];
+  }
+  const double v = q - m * m;
+  if (!(v > 1e-10)) return false;  // fewer than two nodes in the fluid: A singular
+  const double inv_v = 1.0 / v;
+  for (int a = 0; a < 3; ++a) out.g[a] = m * (delta[a] - m) * inv_v;
+  if constexpr (kDerivatives) {
+    const double ddelta = -inv_spacing;  // ∂δ/∂X_d
+    double dm = ddelta, dq = 2 * m * ddelta;
+    for (int a = 0; a < 3; ++a) {
+      out.dw[a] = (dw[a] - out.w[a] * ds0) * inv_s0;
+      dm += out.dw[a] * delta[a];
+      dq += out.dw[a] * delta[a] * delta[a];
+    }
+    const double dv = dq - 2 * m * dm;
+    for (int a = 0; a < 3; ++a) out.dg[a] = (dm * (delta[a] - m) + m * (ddelta - dm) - out.g[a] * dv) * inv_v;
+  }
+  return true;
+}
+
+struct Location1d {
+  double offset[3];
+  int z_lo;  // first z index in the fluid (z-faces: the wall face 0 is excluded)
 };
+Location1d location_1d(Location L) {
+  return {{L == Location::x_face ? 0.0 : 0.5, L == Location::y_face ? 0.0 : 0.5, L == Location::z_face ? 0.0 : 0.5},
+          L == Location::z_face ? 1 : 0};
+}
+
+// The six axes of a point (x, y, z directions × face / centre offsets); index [d][centred].
+template <bool kDerivatives>
+void axes(const grid::Grid& g, const Eigen::Vector3d& X, Axis out[3][2]) {
+  constexpr int kAll = -(1 << 30), kAllHi = 1 << 30;
+  const double spacing[3] = {g.dx(), g.dy(), g.dz()};
+  for (int d = 0; d < 3; ++d) {
+    const double xc = X[d] / spacing[d], inv = 1.0 / spacing[d];
+    for (int centred = 0; centred < 2; ++centred) {
+      const int lo = d < 2 ? kAll : (centred ? 0 : 1), hi = d < 2 ? kAllHi : g.nz() - 1;
+      if (!axis<kDerivatives>(xc, inv, centred ? 0.5 : 0.0, lo, hi, out[d][centred])) singular(X);
+    }
+  }
+}
 
 int wrap(int i, int n) { return ((i % n) + n) % n; }
 
-// The moment matrix from per-direction sums S[d][m] (m = 0, 1, 2).
-Eigen::Matrix4d moment_matrix(const double S[3][3]) {
-  Eigen::Matrix4d A;
-  A(0, 0) = S[0][0] * S[1][0] * S[2][0];
-  A(0, 1) = S[0][1] * S[1][0] * S[2][0];
-  A(0, 2) = S[0][0] * S[1][1] * S[2][0];
-  A(0, 3) = S[0][0] * S[1][0] * S[2][1];
-  A(1, 1) = S[0][2] * S[1][0] * S[2][0];
-  A(1, 2) = S[0][1] * S[1][1] * S[2][0];
-  A(1, 3) = S[0][1] * S[1][0] * S[2][1];
-  A(2, 2) = S[0][0] * S[1][2] * S[2][0];
-  A(2, 3) = S[0][0] * S[1][1] * S[2][1];
-  A(3, 3) = S[0][0] * S[1][0] * S[2][2];
-  for (int r = 1; r < 4; ++r)
-    for (int c = 0; c < r; ++c) A(r, c) = A(c, r);
-  return A;
+void set_indices(const grid::Grid& g, Location L, const Axis& x, const Axis& y, const Axis& z, MlsStencil& s) {
+  s.i0 = wrap(x.first, g.nx());
+  s.j0 = wrap(y.first, g.ny());
+  s.k0 = z.first;
+  s.k_centre = z.first + 1;
+  const int lo = location_1d(L).z_lo, hi = g.nz() - 1;
+  s.c_begin = 0;
+  while (s.c_begin < 3 && s.k0 + s.c_begin < lo) ++s.c_begin;
+  s.c_end = 3;
+  while (s.c_end > 0 && s.k0 + s.c_end - 1 > hi) --s.c_end;
 }
 
-Support build_support(const grid::Grid& g, grid::Location L, const Eigen::Vector3d& X) {
-  using grid::Location;
-  const Geometry1d dim[3] = {{g.dx(), L == Location::x_face ? 0.0 : 0.5},
-                             {g.dy(), L == Location::y_face ? 0.0 : 0.5},
-                             {g.dz(), L == Location::z_face ? 0.0 : 0.5}};
-  int centre[3];
-  for (int d = 0; d < 3; ++d) centre[d] = static_cast<int>(std::lround(X[d] / dim[d].spacing - dim[d].offset));
-  Support sp;
-  sp.s.i0 = wrap(centre[0] - 1, g.nx());
-  sp.s.j0 = wrap(centre[1] - 1, g.ny());
-  sp.s.k0 = centre[2] - 1;
-  sp.s.k_centre = centre[2];
-  const int k_lo = L == Location::z_face ? 1 : 0, k_hi = g.nz() - 1;
-  double S[3][3] = {};
-  for (int d = 0; d < 3; ++d)
-    for (int a = 0; a < 3; ++a) {
-      const int idx = centre[d] - 1 + a;
-      const double delta = (idx + dim[d].offset) - X[d] / dim[d].spacing;
-      const bool valid = d < 2 || (idx >= k_lo && idx <= k_hi);
-      const double w = valid ? mls_weight(std::abs(delta) / kMlsRadiusCells) : 0.0;
-      sp.delta[d][a] = delta;
-      sp.w[d][a] = w;
-      S[d][0] += w;
-      S[d][1] += w * delta;
-      S[d][2] += w * delta * delta;
+// φ_abc = ŵx ŵy ŵz (1 − gx − gy − gz).
+void assemble(const grid::Grid& g, Location L, const Axis& x, const Axis& y, const Axis& z, MlsStencil& s) {
+  set_indices(g, L, x, y, z, s);
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const double wyz = y.w[b] * z.w[c], hyz = 1.0 - y.g[b] - z.g[c];
+      for (int a = 0; a < 3; ++a) s.phi[a + 3 * b + 9 * c] = x.w[a] * wyz * (hyz - x.g[a]);
     }
-  const Eigen::Matrix4d A = moment_matrix(S);
-  bool invertible = false;
-  A.computeInverseWithCheck(sp.A_inverse, invertible, 1e-12);
-  if (!invertible)
-    throw std::logic_error("ibm MLS: singular moment matrix at (" + std::to_string(X[0]) + ", " + std::to_string(X[1]) +
-                           ", " + std::to_string(X[2]) + "): the point is too close to a wall");
-  return sp;
+}
+
+// φ and ∂φ/∂X_d = ∂ŵ_d (Π_{e≠d} ŵ_e) H − W ∂g_d, W = Πŵ, H = 1 − Σg.
+void assemble_gradient(const grid::Grid& g, Location L, const Axis& x, const Axis& y, const Axis& z,
+                       MlsGradientStencil& s) {
+  set_indices(g, L, x, y, z, s);
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const double wyz = y.w[b] * z.w[c], hyz = 1.0 - y.g[b] - z.g[c];
+      const double dwy_z = y.dw[b] * z.w[c], wy_dz = y.w[b] * z.dw[c], dgyz[2] = {y.dg[b], z.dg[c]};
+      for (int a = 0; a < 3; ++a) {
+        const int q = a + 3 * b + 9 * c;
+        const double H = hyz - x.g[a], W = x.w[a] * wyz;
+        s.phi[q] = W * H;
+        s.dphi[0][q] = x.dw[a] * wyz * H - W * x.dg[a];
+        s.dphi[1][q] = x.w[a] * dwy_z * H - W * dgyz[0];
+        s.dphi[2][q] = x.w[a] * wy_dz * H - W * dgyz[1];
+      }
+    }
+}
+
+// The axis indices [d][centred] of a location: its own direction on faces (0), others centred (1).
+void pick(Location L, int& cx, int& cy, int& cz) {
+  cx = L == Location::x_face ? 0 : 1;
+  cy = L == Location::y_face ? 0 : 1;
+  cz = L == Location::z_face ? 0 : 1;
+}
+
+// The three 1-D axes of location L at X (x, y periodic; z bounded by the walls), with the
+// derivative weights when Grad.
+template <bool Grad>
+void axes_at(const grid::Grid& g, Location L, const Eigen::Vector3d& X, Axis (&ax)[3]) {
+  const Location1d l = location_1d(L);
+  const double spacing[3] = {g.dx(), g.dy(), g.dz()};
+  constexpr int kAll = -(1 << 30), kAllHi = 1 << 30;
+  for (int d = 0; d < 3; ++d) {
+    const int lo = d < 2 ? kAll : l.z_lo, hi = d < 2 ? kAllHi : g.nz() - 1;
+    if (!axis<Grad>(X[d] / spacing[d], 1.0 / spacing[d], l.offset[d], lo, hi, ax[d])) singular(X);
+  }
 }
 
 }  // namespace
 
-MlsStencil mls_stencil(const grid::Grid& g, grid::Location L, const Eigen::Vector3d& X) {
-  Support sp = build_support(g, L, X);
-  const Eigen::Vector4d c = sp.A_inverse.col(0);  // A⁻¹ e₁ (A symmetric): φ_k = (c·p_k) W_k
-  for (int cc = 0; cc < 3; ++cc) {
-    const double wz = sp.w[2][cc], pz = c[0] + c[3] * sp.delta[2][cc];
-    for (int b = 0; b < 3; ++b) {
-      const double wyz = sp.w[1][b] * wz, pyz = pz + c[2] * sp.delta[1][b];
-      for (int a = 0; a < 3; ++a) sp.s.phi[a + 3 * b + 9 * cc] = (pyz + c[1] * sp.delta[0][a]) * sp.w[0][a] * wyz;
-    }
-  }
-  return sp.s;
+MlsStencil mls_stencil(const grid::Grid& g, Location L, const Eigen::Vector3d& X) {
+  Axis ax[3];
+  axes_at<false>(g, L, X, ax);
+  MlsStencil s;
+  assemble(g, L, ax[0], ax[1], ax[2], s);
+  return s;
 }
 
-MlsGradientStencil mls_gradient_stencil(const grid::Grid& g, grid::Location L, const Eigen::Vector3d& X) {
-  const Support sp = build_support(g, L, X);
-  MlsGradientStencil out;
-  static_cast<MlsStencil&>(out) = sp.s;
-  const double spacing[3] = {g.dx(), g.dy(), g.dz()};
-  const Eigen::Matrix4d& Ai = sp.A_inverse;
-  const Eigen::Vector4d c = Ai.col(0);  // A⁻¹ e₁ (A symmetric)
-  // ∂w_d/∂X_d per direction: r = |x_k − X|/(2Δ), ∂r/∂X_d = −sign(x_k − X)/(2Δ_d); and the 1-D
-  // sums of w and ∂w, so that ∂A/∂X_d is assembled like A with direction d's sums replaced.
-  double dw[3][3], S[3][3] = {}, T[3][3] = {};
-  for (int d = 0; d < 3; ++d)
-    for (int a = 0; a < 3; ++a) {
-      const double delta = sp.delta[d][a];
-      const double sign = delta > 0 ? 1.0 : (delta < 0 ? -1.0 : 0.0);
-      dw[d][a] = sp.w[d][a] == 0 ? 0.0
-                                 : mls_weight_derivative(std::abs(delta) / kMlsRadiusCells) *
-                                       (-sign / (kMlsRadiusCells * spacing[d]));
-      for (int m = 0; m < 3; ++m) {
-        const double power = m == 0 ? 1.0 : (m == 1 ? delta : delta * delta);
-        S[d][m] += sp.w[d][a] * power;
-        T[d][m] += dw[d][a] * power;
-      }
-    }
-  Eigen::RowVector4d cdA_Ai[3];
-  for (int d = 0; d < 3; ++d) {
-    double Sd[3][3];
-    for (int e = 0; e < 3; ++e)
-      for (int m = 0; m < 3; ++m) Sd[e][m] = e == d ? T[e][m] : S[e][m];
-    cdA_Ai[d] = c.transpose() * moment_matrix(Sd) * Ai;
+MlsGradientStencil mls_gradient_stencil(const grid::Grid& g, Location L, const Eigen::Vector3d& X) {
+  Axis ax[3];
+  axes_at<true>(g, L, X, ax);
+  MlsGradientStencil s;
+  assemble_gradient(g, L, ax[0], ax[1], ax[2], s);
+  return s;
+}
+
+void mls_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out) {
+  Axis ax[3][2];
+  axes<false>(g, X, ax);
+  const Location where[3] = {Location::x_face, Location::y_face, Location::z_face};
+  for (int c = 0; c < 3; ++c) {
+    int cx, cy, cz;
+    pick(where[c], cx, cy, cz);
+    assemble(g, where[c], ax[0][cx], ax[1][cy], ax[2][cz], out[static_cast<std::size_t>(c)]);
   }
-  // Seven linear forms of p_k = [1, δx, δy, δz] per node: c·p (φ = c·p W), (A⁻¹e_{d+1})·p and
-  // (c ∂A_d A⁻¹)·p for d = x, y, z, evaluated plane by plane, row by row (ours, for cost):
-  //   ∂φ/∂X_d = (A⁻¹e_{d+1})·p_k W_k/Δ_d + (c·p_k) ∂W_k/∂X_d − (c ∂A_d A⁻¹)·p_k W_k
-  double coef[7][4];
-  for (int e = 0; e < 4; ++e) {
-    coef[0][e] = c[e];
-    for (int d = 0; d < 3; ++d) {
-      coef[1 + d][e] = Ai(e, d + 1);
-      coef[4 + d][e] = cdA_Ai[d][e];
-    }
-  }
-  for (int cc = 0; cc < 3; ++cc) {
-    if (sp.w[2][cc] == 0) continue;  // outside the fluid: φ = ∂φ = 0
-    double fz[7];
-    for (int f = 0; f < 7; ++f) fz[f] = coef[f][0] + coef[f][3] * sp.delta[2][cc];
-    for (int b = 0; b < 3; ++b) {
-      double fyz[7];
-      for (int f = 0; f < 7; ++f) fyz[f] = fz[f] + coef[f][2] * sp.delta[1][b];
-      const double wyz = sp.w[1][b] * sp.w[2][cc];
-      const double dwyz[3] = {wyz, dw[1][b] * sp.w[2][cc], sp.w[1][b] * dw[2][cc]};  // d = x: times dw_x below
-      for (int a = 0; a < 3; ++a) {
-        const int q = a + 3 * b + 9 * cc;
-        double v[7];
-        for (int f = 0; f < 7; ++f) v[f] = fyz[f] + coef[f][1] * sp.delta[0][a];
-        const double Wk = sp.w[0][a] * wyz;
-        const double dW[3] = {dw[0][a] * dwyz[0], sp.w[0][a] * dwyz[1], sp.w[0][a] * dwyz[2]};
-        out.phi[q] = v[0] * Wk;
-        for (int d = 0; d < 3; ++d) out.dphi[d][q] = v[1 + d] * Wk / spacing[d] + v[0] * dW[d] - v[4 + d] * Wk;
-      }
-    }
-  }
-  return out;
+}
+
+MlsPoint mls_point(const grid::Grid& g, const Eigen::Vector3d& X, bool derivatives) {
+  MlsPoint P;
+  if (derivatives)
+    axes<true>(g, X, P.axis);
+  else
+    axes<false>(g, X, P.axis);
+  return P;
 }
 
 }  // namespace systole::ibm

@@ -4,13 +4,15 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 
 namespace systole::ibm {
 
 using grid::Location;
 
 Transfer::Transfer(const grid::Slabs& slabs, const Markers& markers) : slabs_(slabs), markers_(markers) {
-  rebuild();
+  rebuild_all();
 }
 
 bool Transfer::owns_plane(int k) const {
@@ -20,92 +22,146 @@ bool Transfer::owns_plane(int k) const {
   return k >= slabs_.k_begin() && k < slabs_.k_begin() + slabs_.k_count();
 }
 
-void Transfer::rebuild() {
+void Transfer::rebuild_all() {
+  built_count_.assign(built_count_.size(), static_cast<std::size_t>(-1));  // "never built"
+  (void)rebuild();
+}
+
+int Transfer::rebuild() {
+  const std::vector<Body>& bodies = markers_.bodies();
+  const MarkerArrays& m = markers_.markers();
+  entries_.resize(bodies.size());
+  built_active_.resize(bodies.size(), 0);
+  built_first_.resize(bodies.size(), 0);
+  built_count_.resize(bodies.size(), static_cast<std::size_t>(-1));
+  built_position_.resize(m.size(), Vec3::Zero());
+  int rebuilt = 0;
+  for (std::size_t body = 0; body < bodies.size(); ++body) {
+    const Body& b = bodies[body];
+    const auto first = static_cast<std::ptrdiff_t>(b.first_marker), last = first + static_cast<std::ptrdiff_t>(b.marker_count);
+    const bool unchanged = built_count_[body] == b.marker_count && built_first_[body] == b.first_marker &&
+                           built_active_[body] == static_cast<char>(b.active) &&
+                           std::equal(m.position.begin() + first, m.position.begin() + last,
+                                      built_position_.begin() + first);
+    if (unchanged) continue;
+    rebuild_body(body);
+    std::copy(m.position.begin() + first, m.position.begin() + last, built_position_.begin() + first);
+    built_active_[body] = static_cast<char>(b.active);
+    built_first_[body] = b.first_marker;
+    built_count_[body] = b.marker_count;
+    ++rebuilt;
+  }
+  return rebuilt;
+}
+
+void Transfer::rebuild_body(std::size_t body) {
   const grid::Grid& g = slabs_.grid();
   const MarkerArrays& m = markers_.markers();
+  const Body& b = markers_.bodies()[body];
+  BodyEntries& E = entries_[body];
+  if (!b.active) {
+    for (auto& list : E) list.clear();
+    return;
+  }
   const int lo = slabs_.k_begin(), hi = slabs_.k_begin() + slabs_.k_count();  // [lo, hi)
-  const Location where[3] = {Location::x_face, Location::y_face, Location::z_face};
-  // Threads take contiguous blocks of markers in thread order (schedule(static), OpenMP 5.1
-  // §2.11.4) and keep their own lists; concatenated in thread order they are in marker order —
-  // the order spreading accumulates in, so the result does not depend on the thread count.
-  const std::size_t n = m.size();
-  const int nt = static_cast<std::ptrdiff_t>(n) >= kThreadedMarkers ? omp_get_max_threads() : 1;
-  std::vector<std::array<std::vector<Entry>, 3>> parts(static_cast<std::size_t>(nt));
-#pragma omp parallel num_threads(nt)
-  {
-    auto& mine = parts[static_cast<std::size_t>(omp_get_thread_num())];
-    for (auto& list : mine) list.reserve(n / static_cast<std::size_t>(nt) + 1);  // one rank holds ≈ all
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t bb = 0; bb < static_cast<std::ptrdiff_t>(n); ++bb) {
-      const std::size_t b = static_cast<std::size_t>(bb);
-      if (!markers_.active(b)) continue;
-      for (int c = 0; c < 3; ++c) {
-        // Cheap pre-check on the z extent before building the stencil (support: centre ± 1).
-        const double off = where[c] == Location::z_face ? 0.0 : 0.5;
-        const int kc = static_cast<int>(std::lround(m.position[b].z() / g.dz() - off));
-        if (kc + 1 < lo - 1 || kc - 1 > hi) continue;
-        Entry e{b, false, false, mls_stencil(g, where[c], m.position[b])};
-        e.owner = owns_plane(e.stencil.k_centre);
-        e.spreads = e.stencil.k0 + 2 >= lo && e.stencil.k0 < hi;
-        if (e.owner || e.spreads) mine[c].push_back(e);
-      }
+  const std::size_t first = b.first_marker, count = b.marker_count;
+  // Pass 1 (cheap): which (marker, component) pairs this rank needs, from the centre plane of
+  // each support alone (the stencil's k_centre: mls_nearest, as in mls.cc), and each pair's
+  // slot: the lists stay in marker order whatever the thread count.
+  std::vector<std::uint32_t>& slot = slot_;    // kept between calls: no page faults per step
+  std::vector<std::uint8_t>& flags = flags_;   // bit 2c: owner, bit 2c+1: spreads
+  slot.resize(3 * count);
+  flags.assign(count, 0);
+  std::size_t n_c[3] = {0, 0, 0};
+  for (std::size_t q = 0; q < count; ++q) {
+    const double zc = m.position[first + q].z() / g.dz();
+    for (int c = 0; c < 3; ++c) {
+      const int kc = mls_nearest(zc - (c == 2 ? 0.0 : 0.5));
+      const bool owner = owns_plane(kc), spreads = kc + 1 >= lo && kc - 1 < hi;
+      if (!(owner || spreads)) continue;
+      flags[q] = static_cast<std::uint8_t>(flags[q] | (owner ? 1 << (2 * c) : 0) | (spreads ? 2 << (2 * c) : 0));
+      slot[3 * q + static_cast<std::size_t>(c)] = static_cast<std::uint32_t>(n_c[c]++);
     }
   }
-  for (int c = 0; c < 3; ++c) {
-    std::vector<Entry>& list = entries_[c];
-    list.clear();
-    std::size_t total = 0;
-    for (const auto& part : parts) total += part[c].size();
-    list.reserve(total);
-    for (auto& part : parts) list.insert(list.end(), part[c].begin(), part[c].end());
+  for (int c = 0; c < 3; ++c) E[static_cast<std::size_t>(c)].resize(n_c[c]);
+  // Pass 2: the stencils (the three faces share their 1-D weights), each into its slot.
+#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(count) >= kThreadedMarkers)
+  for (std::ptrdiff_t qq = 0; qq < static_cast<std::ptrdiff_t>(count); ++qq) {
+    const std::size_t q = static_cast<std::size_t>(qq);
+    if (flags[q] == 0) continue;
+    std::array<MlsStencil, 3> st;
+    mls_face_stencils(g, m.position[first + q], st);
+    for (int c = 0; c < 3; ++c) {
+      const bool owner = (flags[q] >> (2 * c)) & 1, spreads = (flags[q] >> (2 * c + 1)) & 1;
+      if (!(owner || spreads)) continue;
+      Entry& e = E[static_cast<std::size_t>(c)][slot[3 * q + static_cast<std::size_t>(c)]];
+      e.marker = static_cast<std::uint32_t>(first + q);
+      e.owner = owner;
+      e.spreads = spreads;
+      e.stencil = st[static_cast<std::size_t>(c)];
+    }
   }
 }
 
 template <grid::Location L>
-void Transfer::interpolate_component(const grid::Field<L>& f, const std::vector<Entry>& entries, int c,
-                                     std::vector<double>& out) const {
+void Transfer::interpolate_component(const grid::Field<L>& f, int c, std::vector<Vec3>& out) const {
   // Each entry writes its own marker's slot: no races.
+  for (const BodyEntries& body : entries_) {
+    const std::vector<Entry>& entries = body[static_cast<std::size_t>(c)];
 #pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(entries.size()) >= kThreadedMarkers)
-  for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(entries.size()); ++q) {
-    const Entry& e = entries[static_cast<std::size_t>(q)];
-    if (e.owner) out[3 * e.marker + c] = apply_stencil(f, e.stencil, e.stencil.phi);
+    for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(entries.size()); ++q) {
+      const Entry& e = entries[static_cast<std::size_t>(q)];
+      if (e.owner) out[e.marker][c] = apply_stencil(f, e.stencil, e.stencil.phi);
+    }
   }
 }
 
 std::vector<Vec3> Transfer::interpolate(const ConstVelocityView& u) const {
-  const std::size_t n = markers_.size();
-  std::vector<double> local(3 * n, 0.0), global(3 * n, 0.0);
-  interpolate_component(u.u, entries_[0], 0, local);
-  interpolate_component(u.v, entries_[1], 1, local);
-  interpolate_component(u.w, entries_[2], 2, local);
-  MPI_Allreduce(local.data(), global.data(), static_cast<int>(3 * n), MPI_DOUBLE, MPI_SUM, slabs_.comm());
-  std::vector<Vec3> out(n);
-  for (std::size_t b = 0; b < n; ++b) out[b] = Vec3(global[3 * b], global[3 * b + 1], global[3 * b + 2]);
+  std::vector<Vec3> out;
+  interpolate(u, out);
   return out;
 }
 
+void Transfer::interpolate(const ConstVelocityView& u, std::vector<Vec3>& out) const {
+  const std::size_t n = markers_.size();
+  out.assign(n, Vec3::Zero());
+  interpolate_component(u.u, 0, out);
+  interpolate_component(u.v, 1, out);
+  interpolate_component(u.w, 2, out);
+  // Exactly one rank contributes each non-zero value: the sum is the one-rank value bitwise.
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three contiguous doubles");
+  if (slabs_.size() > 1)
+    MPI_Allreduce(MPI_IN_PLACE, out.data()->data(), static_cast<int>(3 * n), MPI_DOUBLE, MPI_SUM, slabs_.comm());
+}
+
 template <grid::Location L>
-void Transfer::spread_component(const std::vector<Entry>& entries, int c, const std::vector<Vec3>& F,
-                                grid::Field<L>& f) const {
-  const double cell_volume = slabs_.grid().cell_volume();
+void Transfer::spread_component(int c, const std::vector<Vec3>& F, grid::Field<L>& f) const {
+  const double cell_volume = slabs_.grid().cell_volume(), h = markers_.h();
+  const std::vector<double>& area = markers_.markers().area;
   const int nx = f.nx(), ny = f.ny(), kb = f.k_begin(), nzl = f.k_count();
-  for (const Entry& e : entries) {
-    if (!e.spreads) continue;
-    const double amplitude = markers_.forcing_volume(e.marker) / cell_volume * F[e.marker][c];  // ς_b F_b
-    if (amplitude == 0) continue;
-    const MlsStencil& s = e.stencil;
-    for (int cc = 0; cc < 3; ++cc) {
-      const int k = s.k0 + cc - kb;
-      if (k < 0 || k >= nzl) continue;  // another rank's plane (or outside the fluid: φ = 0)
-      for (int b = 0; b < 3; ++b) {
-        int j = s.j0 + b;
-        if (j >= ny) j -= ny;
-        for (int a = 0; a < 3; ++a) {
-          const double phi = s.phi[a + 3 * b + 9 * cc];
-          if (phi == 0) continue;
-          int i = s.i0 + a;
-          if (i >= nx) i -= nx;
-          f(i, j, k) += amplitude * phi;
+  for (const BodyEntries& body : entries_) {
+    for (const Entry& e : body[static_cast<std::size_t>(c)]) {
+      if (!e.spreads) continue;
+      const double amplitude = area[e.marker] * h / cell_volume * F[e.marker][c];  // ς_b F_b
+      if (amplitude == 0) continue;
+      const MlsStencil& s = e.stencil;
+      std::ptrdiff_t ii[3], jj[3];
+      for (int a = 0; a < 3; ++a) {
+        const int i = s.i0 + a, j = s.j0 + a;
+        ii[a] = i >= nx ? i - nx : i;
+        jj[a] = (j >= ny ? j - ny : j) * f.stride_j();
+      }
+      double* base = f.data() + f.index(0, 0, 0);
+      for (int cc = s.c_begin; cc < s.c_end; ++cc) {
+        const int k = s.k0 + cc - kb;
+        if (k < 0 || k >= nzl) continue;  // another rank's plane
+        double* plane = base + k * f.stride_k();
+        for (int b = 0; b < 3; ++b) {
+          double* row = plane + jj[b];
+          const double* phi = s.phi.data() + 3 * b + 9 * cc;
+          row[ii[0]] += amplitude * phi[0];
+          row[ii[1]] += amplitude * phi[1];
+          row[ii[2]] += amplitude * phi[2];
         }
       }
     }
@@ -117,9 +173,9 @@ void Transfer::spread(const std::vector<Vec3>& force_density, VelocityView f) co
   // bitwise independent of the thread count).
 #pragma omp parallel for schedule(static, 1) if (static_cast<std::ptrdiff_t>(markers_.size()) >= kThreadedMarkers)
   for (int c = 0; c < 3; ++c) {
-    if (c == 0) spread_component(entries_[0], 0, force_density, f.u);
-    if (c == 1) spread_component(entries_[1], 1, force_density, f.v);
-    if (c == 2) spread_component(entries_[2], 2, force_density, f.w);
+    if (c == 0) spread_component(0, force_density, f.u);
+    if (c == 1) spread_component(1, force_density, f.v);
+    if (c == 2) spread_component(2, force_density, f.w);
   }
 }
 

@@ -12,8 +12,11 @@
 //   writing only its own interior nodes (markers are replicated, markers.h). No reverse halo
 //   sum, no write conflicts, and each node accumulates its contributions in marker order on
 //   any number of ranks: bitwise equal to np = 1.
-// The stencils depend only on marker positions: rebuild() after the markers moved.
+// The stencils depend only on marker positions: rebuild() after the markers moved. rebuild()
+// recomputes only the bodies whose marker positions or on/off state changed since the last
+// build (ours, round 3: a fixed body, e.g. the valvular plane, keeps its stencils).
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "solver/grid/grid.h"
@@ -44,11 +47,17 @@ class Transfer {
   // Builds the stencils of `markers`' active markers that this rank needs. Collective: no
   // (purely local), but every rank must call rebuild() at the same points.
   Transfer(const grid::Slabs& slabs, const Markers& markers);
-  void rebuild();
+  // Rebuilds the stencils of the bodies that moved (or were switched on/off, or gained
+  // markers); returns how many bodies were rebuilt. rebuild_all() ignores the check.
+  int rebuild();
+  void rebuild_all();
 
   // u(X_b) for every marker (0 for inactive ones), the same on every rank. Collective.
   // Halos of u must be valid.
   std::vector<Vec3> interpolate(const ConstVelocityView& u) const;
+  // The same into `out` (resized to the marker count; reusing its storage avoids the page
+  // faults of a fresh allocation per call).
+  void interpolate(const ConstVelocityView& u, std::vector<Vec3>& out) const;
   // Adds f_k += ς_b φ_k(X_b) F_b on this rank's interior faces, ς_b = ΔV_b / ΔV_cell
   // (eq 6–7; with Σφ_k = 1 the total grid force Σ f_k ΔV_cell equals Σ F_b ΔV_b). F is a
   // force density per marker (inactive markers skipped). Not collective.
@@ -66,39 +75,51 @@ class Transfer {
 
  private:
   struct Entry {
-    std::size_t marker;
+    std::uint32_t marker;
     bool owner;       // this rank interpolates it
     bool spreads;     // its support reaches this rank's interior planes
     MlsStencil stencil;
   };
+  // Per body, per component (u, v, w): the entries of its markers this rank needs, in marker
+  // order (bodies' markers are contiguous, so body order then entry order is marker order).
+  using BodyEntries = std::array<std::vector<Entry>, 3>;
+  void rebuild_body(std::size_t body);
   template <grid::Location L>
-  void interpolate_component(const grid::Field<L>& f, const std::vector<Entry>& entries, int c,
-                             std::vector<double>& out) const;
+  void interpolate_component(const grid::Field<L>& f, int c, std::vector<Vec3>& out) const;
   template <grid::Location L>
-  void spread_component(const std::vector<Entry>& entries, int c, const std::vector<Vec3>& F,
-                        grid::Field<L>& f) const;
+  void spread_component(int c, const std::vector<Vec3>& F, grid::Field<L>& f) const;
   const grid::Slabs& slabs_;
   const Markers& markers_;
-  std::array<std::vector<Entry>, 3> entries_;  // per component u, v, w
+  std::vector<BodyEntries> entries_;
+  // What the stencils were built from (to skip bodies that did not move).
+  std::vector<Vec3> built_position_;
+  std::vector<char> built_active_;
+  std::vector<std::size_t> built_first_, built_count_;
+  std::vector<std::uint32_t> slot_;  // rebuild scratch
+  std::vector<std::uint8_t> flags_;
 };
 
 // Value of a field from an MLS stencil on this rank (planes k0..k0+2 must be local or halo).
+// Planes outside the fluid (φ = 0) are skipped; nodes are visited in the order c, b, a.
 template <grid::Location L>
 double apply_stencil(const grid::Field<L>& f, const MlsStencil& s, const std::array<double, 27>& weights) {
-  const int nx = f.nx(), ny = f.ny(), kb = f.k_begin();
+  const int nx = f.nx(), ny = f.ny();
+  std::ptrdiff_t ii[3], jj[3];
+  for (int a = 0; a < 3; ++a) {
+    const int i = s.i0 + a, j = s.j0 + a;
+    ii[a] = i >= nx ? i - nx : i;
+    jj[a] = (j >= ny ? j - ny : j) * f.stride_j();
+  }
+  const double* base = f.data() + f.index(0, 0, s.k0 - f.k_begin());
   double sum = 0;
-  for (int c = 0; c < 3; ++c) {
-    const int k = s.k0 + c - kb;
+  for (int c = s.c_begin; c < s.c_end; ++c) {
+    const double* plane = base + c * f.stride_k();
     for (int b = 0; b < 3; ++b) {
-      int j = s.j0 + b;
-      if (j >= ny) j -= ny;
-      for (int a = 0; a < 3; ++a) {
-        const double w = weights[a + 3 * b + 9 * c];
-        if (w == 0) continue;
-        int i = s.i0 + a;
-        if (i >= nx) i -= nx;
-        sum += w * f(i, j, k);
-      }
+      const double* row = plane + jj[b];
+      const double* w = weights.data() + 3 * b + 9 * c;
+      sum += w[0] * row[ii[0]];
+      sum += w[1] * row[ii[1]];
+      sum += w[2] * row[ii[2]];
     }
   }
   return sum;

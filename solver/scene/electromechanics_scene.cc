@@ -219,6 +219,7 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   structure::ShellOptions shell_options;
   shell_options.law = em.spring_law;
   shell_options.fung_exponent_cap = scenario.structure.fung_exponent_cap;
+  shell_options.fung_compression_fraction = scenario.structure.fung_compression_fraction;
   shell_options.active_min_fibre_stretch = scenario.tissue.active_min_fibre_stretch;
   shell_options.active_cross_fibre_fraction = scenario.tissue.active_cross_fibre_fraction;
   shell_options.bending = em.bending;
@@ -235,20 +236,19 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
     c->ep_node.assign(mesh.node_count(), -1);
     for (std::size_t k = 0; k < source.size(); ++k)
       if (source[k][0] == body_index) c->ep_node[static_cast<std::size_t>(source[k][1])] = static_cast<std::int32_t>(k);
-    // The fibrous annulus (ours): nodes on the anchor ring and one edge away from it carry no
-    // active tension (the valvular plane's ring is not muscle; contracting triangles pulling on
-    // the fixed ring crumpled the edges next to it, docs/electromechanics.md).
-    if (em.passive_annulus) {
-      std::vector<char> near(mesh.node_count(), 0);
-      for (const auto& t : mesh.tri) {
-        const bool touches = std::any_of(t.begin(), t.end(), [&](std::int32_t i) {
-          return (mesh.region[static_cast<std::size_t>(i)] & geometry::kAnchor) != 0;
-        });
-        if (touches)
-          for (std::int32_t i : t) near[static_cast<std::size_t>(i)] = 1;
-      }
-      for (std::size_t i = 0; i < near.size(); ++i)
-        if (near[i]) c->ep_node[i] = -1;
+    // The fibrous annulus (ours): nodes within passive_annulus_mm of the anchor ring (stress-free
+    // positions) carry no active tension (the valvular plane's ring is not muscle; contracting
+    // triangles pulling on the fixed ring crumpled the edges next to it, docs/electromechanics.md).
+    if (em.passive_annulus_mm > 0) {
+      std::vector<Vec3> ring;
+      for (std::size_t i = 0; i < mesh.node_count(); ++i)
+        if (mesh.region[i] & geometry::kAnchor) ring.push_back(mesh.position_mm[i]);
+      for (std::size_t i = 0; i < mesh.node_count(); ++i)
+        for (const Vec3& r : ring)
+          if ((mesh.position_mm[i] - r).norm() <= em.passive_annulus_mm) {
+            c->ep_node[i] = -1;
+            break;
+          }
     }
     chambers.push_back(std::move(c));
   };

@@ -43,6 +43,7 @@ Bodies build_bodies(const config::Scenario& s) {
   structure::ShellOptions opt;
   opt.law = st.law;
   opt.fung_exponent_cap = st.fung_exponent_cap;
+  opt.fung_compression_fraction = st.fung_compression_fraction;
   opt.active_min_fibre_stretch = s.tissue.active_min_fibre_stretch;
   opt.active_cross_fibre_fraction = s.tissue.active_cross_fibre_fraction;
   opt.bending = st.bending;

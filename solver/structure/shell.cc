@@ -69,7 +69,7 @@ double hinge_angle(const Vec3& e0, const Vec3& e1, const Vec3& o1, const Vec3& o
 // Springs: forces into f; when `row` is given, also the Gershgorin row sums of the tangent
 // stiffness (axial df/dl = C/l^2 (tau' l0/l - tau) and transverse f/l, 2 max of both per end).
 template <class Law>
-void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>& x, double q_cap,
+void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>& x, const LawParams& lp,
                  Vec3* f, double* row, double limit, double& worst, std::int32_t& worst_edge,
                  std::int32_t& bad_edge, std::int32_t k0 = 0, std::int32_t k1 = -1) {
   const std::int32_t n = k1 < 0 ? static_cast<std::int32_t>(springs.size()) : k1;
@@ -79,7 +79,7 @@ void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>
     const double l = d.norm();
     const double eps = 1 - s.rest_length_mm / l;
     double tau, dtau;
-    Law::stress_tangent(eps, s.c_kpa, s.alpha, q_cap, tau, dtau);
+    Law::stress_tangent(eps, s.c_kpa, s.alpha, lp, tau, dtau);
     const double c_l2 = s.cross_section_mm3 / (l * l);
     const Vec3 fv = (tau * c_l2) * d;  // on i, towards j when stretched
     f[s.i] += fv;
@@ -151,6 +151,9 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
                      " must be in [0, 1)");
   if (!(options.active_cross_fibre_fraction >= 0 && options.active_cross_fibre_fraction <= 1))
     throw InputError(body + ": tissue.active_cross_fibre_fraction = " + fmt(options.active_cross_fibre_fraction) +
+                     " must be in [0, 1]");
+  if (!(options.fung_compression_fraction >= 0 && options.fung_compression_fraction <= 1))
+    throw InputError(body + ": structure.fung_compression_fraction = " + fmt(options.fung_compression_fraction) +
                      " must be in [0, 1]");
   if (!(options.fung_exponent_cap > 0))
     throw InputError(body + ": structure.fung_exponent_cap = " + fmt(options.fung_exponent_cap) + " must be > 0");
@@ -350,7 +353,7 @@ void ShellModel::add_spring_forces(const std::vector<Vec3>& x, std::vector<Vec3>
   double worst = 0;
   std::int32_t we = -1, bad = -1;
   const double inf = std::numeric_limits<double>::infinity();
-  const double q = options_.fung_exponent_cap;
+  const LawParams q{options_.fung_exponent_cap, options_.fung_compression_fraction};
   switch (law_->kind) {
     case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x, q, f.data(), nullptr, inf, worst, we, bad); break;
     case LawKind::kLinear: spring_loop<kernels::Linear>(springs_, x, q, f.data(), nullptr, inf, worst, we, bad); break;
@@ -367,7 +370,7 @@ double ShellModel::spring_energy(const std::vector<Vec3>& x) const {
   double w = 0;
   for (const EdgeSpring& s : springs_) {
     const double l = (x[s.j] - x[s.i]).norm();
-    w += edge_energy(*law_, 1 - s.rest_length_mm / l, s.c_kpa, s.alpha, options_.fung_exponent_cap, s.cross_section_mm3);
+    w += edge_energy(*law_, 1 - s.rest_length_mm / l, s.c_kpa, s.alpha, LawParams{options_.fung_exponent_cap, options_.fung_compression_fraction}, s.cross_section_mm3);
   }
   return w;
 }
@@ -465,7 +468,7 @@ void ShellModel::internal_forces_range(Vec3* f, double* row, std::int32_t s0, st
                                        std::int32_t h1, double& worst, std::int32_t& worst_edge,
                                        std::int32_t& bad) const {
   const double lim = options_.strain_limit;
-  const double q = options_.fung_exponent_cap;
+  const LawParams q{options_.fung_exponent_cap, options_.fung_compression_fraction};
   switch (law_->kind) {
     case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1); break;
     case LawKind::kLinear:

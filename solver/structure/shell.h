@@ -58,6 +58,8 @@ ShellMaterials materials_from_config(const config::Tissue& tissue);
 struct ShellOptions {
   std::string law = "fung";        // spring_laws() name
   double fung_exponent_cap = 4;    // law "fung_tension": the largest exponent a eps^2 (ours)
+  double fung_compression_fraction = 0;  // law "fung_tension": share of the (capped) Fung
+                                         // stiffening kept in compression (ours)
   double active_min_fibre_stretch = 0;  // length-tension (ours): the active stress is tau f(lambda_f),
                                         // f = 1 - ((1 - lambda)/(1 - m))^2 on [m, 1], 0 below m,
                                         // 1 above 1; 0: f = 1 (the seed's eq 24)

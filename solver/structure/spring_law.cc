@@ -8,20 +8,20 @@
 namespace systole::structure {
 namespace {
 
-double fung_stress(double e, double c, double a, double) { return kernels::Fung::stress(e, c, a); }
-double fung_tangent(double e, double c, double a, double) { return kernels::Fung::tangent(e, c, a); }
-double linear_stress(double e, double c, double a, double) { return kernels::Linear::stress(e, c, a); }
-double linear_tangent(double e, double c, double a, double) { return kernels::Linear::tangent(e, c, a); }
-double neo_stress(double e, double c, double a, double) { return kernels::NeoHookean::stress(e, c, a); }
-double neo_tangent(double e, double c, double a, double) { return kernels::NeoHookean::tangent(e, c, a); }
-double fung_tension_stress(double e, double c, double a, double q_cap) {
+double fung_stress(double e, double c, double a, const LawParams&) { return kernels::Fung::stress(e, c, a); }
+double fung_tangent(double e, double c, double a, const LawParams&) { return kernels::Fung::tangent(e, c, a); }
+double linear_stress(double e, double c, double a, const LawParams&) { return kernels::Linear::stress(e, c, a); }
+double linear_tangent(double e, double c, double a, const LawParams&) { return kernels::Linear::tangent(e, c, a); }
+double neo_stress(double e, double c, double a, const LawParams&) { return kernels::NeoHookean::stress(e, c, a); }
+double neo_tangent(double e, double c, double a, const LawParams&) { return kernels::NeoHookean::tangent(e, c, a); }
+double fung_tension_stress(double e, double c, double a, const LawParams& lp) {
   double tau, dtau;
-  kernels::FungTension::stress_tangent(e, c, a, q_cap, tau, dtau);
+  kernels::FungTension::stress_tangent(e, c, a, lp, tau, dtau);
   return tau;
 }
-double fung_tension_tangent(double e, double c, double a, double q_cap) {
+double fung_tension_tangent(double e, double c, double a, const LawParams& lp) {
   double tau, dtau;
-  kernels::FungTension::stress_tangent(e, c, a, q_cap, tau, dtau);
+  kernels::FungTension::stress_tangent(e, c, a, lp, tau, dtau);
   return dtau;
 }
 
@@ -47,7 +47,7 @@ const std::vector<SpringLaw>& spring_laws() {
        "uniaxial incompressible neo-Hookean: tau = (c a / 3)(lambda - lambda^-2), lambda = l/l0",
        LawKind::kNeoHookean, neo_stress, neo_tangent},
       {"fung_tension",
-       "Fung in tension with the exponent capped at q_cap (then linear), linear c a eps in compression (ours)",
+       "Fung in tension with the exponent capped at q_cap (then linear); in compression c a eps plus a fraction of the capped stiffening (ours)",
        LawKind::kFungTension, fung_tension_stress, fung_tension_tangent},
   };
   return laws;
@@ -69,14 +69,14 @@ double alpha_phi(double alpha_f, double alpha_c, double cos2_phi) {
   return std::sqrt(alpha_f * alpha_f * cos2_phi + alpha_c * alpha_c * (1 - cos2_phi));
 }
 
-double edge_energy(const SpringLaw& law, double eps, double c_kpa, double alpha, double q_cap,
+double edge_energy(const SpringLaw& law, double eps, double c_kpa, double alpha, const LawParams& lp,
                    double cross_section_mm3) {
   const double half = 0.5 * eps;
   double sum = 0;
   for (int k = 0; k < 10; ++k) {
     for (double sign : {-1.0, 1.0}) {
       const double e = half + sign * half * kGlX[k];
-      sum += kGlW[k] * law.stress(e, c_kpa, alpha, q_cap) / (1 - e);
+      sum += kGlW[k] * law.stress(e, c_kpa, alpha, lp) / (1 - e);
     }
   }
   return cross_section_mm3 * half * sum;

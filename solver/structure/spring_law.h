@@ -10,13 +10,16 @@
 //   neo_hookean tau = (c a / 3) (lambda - lambda^-2), lambda = l / l0 = 1 / (1 - eps)
 //               (uniaxial incompressible neo-Hookean nominal stress, mu = c a / 3) (ours)
 //   fung_tension tau = fung for eps >= 0 while a eps^2 <= q_cap, continued linearly with the
-//               tangent at a eps^2 = q_cap beyond; tau = c a eps for eps < 0 (ours: the
+//               tangent at a eps^2 = q_cap beyond; tau = c a eps (+ a fraction r of the capped
+//               law's stiffening) for eps < 0 (ours: the
 //               exponential stiffening in tension only, and bounded, so the explicit stable step
 //               stays bounded; docs/electromechanics.md "Tissue law")
 // The stateless functions are pure and cheap; the force loop is templated on the law.
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "solver/structure/law_kernels.h"
 
 namespace systole::structure {
 
@@ -26,10 +29,9 @@ struct SpringLaw {
   std::string_view name;
   std::string_view doc;
   LawKind kind;
-  // tau(eps) in kPa and d tau / d eps in kPa; q_cap (the largest Fung exponent) is read by
-  // fung_tension only.
-  double (*stress)(double eps, double c_kpa, double alpha, double q_cap);
-  double (*tangent)(double eps, double c_kpa, double alpha, double q_cap);
+  // tau(eps) in kPa and d tau / d eps in kPa; LawParams are read by fung_tension only.
+  double (*stress)(double eps, double c_kpa, double alpha, const LawParams& lp);
+  double (*tangent)(double eps, double c_kpa, double alpha, const LawParams& lp);
 };
 
 // Every registered law, in a fixed order.
@@ -47,7 +49,7 @@ double alpha_phi(double alpha_f, double alpha_c, double cos2_phi);
 // is f = tau(eps) * C / l with C = sum over the edge's triangles of s_T A_T (stress-free
 // thickness times area, frozen), so U(eps) = C * int_0^eps tau(e) / (1 - e) de
 // (20-point Gauss-Legendre; exact to round-off for |eps| < 0.7 with the seed's alphas).
-double edge_energy(const SpringLaw& law, double eps, double c_kpa, double alpha, double q_cap,
+double edge_energy(const SpringLaw& law, double eps, double c_kpa, double alpha, const LawParams& lp,
                    double cross_section_mm3);
 
 }  // namespace systole::structure

@@ -176,10 +176,10 @@ TEST(StructureForces, AlphaPhiAndLawsAgreeAtSmallStrain) {
   EXPECT_DOUBLE_EQ(alpha_phi(49.56, 5.29, 1.0), 49.56);
   EXPECT_DOUBLE_EQ(alpha_phi(49.56, 5.29, 0.0), 5.29);
   for (const auto& law : spring_laws()) {
-    EXPECT_NEAR(law.tangent(0, 0.0133, 49.56, 4.0), 0.0133 * 49.56, 1e-12) << law.name;
+    EXPECT_NEAR(law.tangent(0, 0.0133, 49.56, LawParams{}), 0.0133 * 49.56, 1e-12) << law.name;
     const double h = 1e-6;
-    EXPECT_NEAR((law.stress(0.2 + h, 0.0133, 49.56, 4.0) - law.stress(0.2 - h, 0.0133, 49.56, 4.0)) / (2 * h),
-                law.tangent(0.2, 0.0133, 49.56, 4.0), 1e-6)
+    EXPECT_NEAR((law.stress(0.2 + h, 0.0133, 49.56, LawParams{}) - law.stress(0.2 - h, 0.0133, 49.56, LawParams{})) / (2 * h),
+                law.tangent(0.2, 0.0133, 49.56, LawParams{}), 1e-6)
         << law.name;
   }
 }
@@ -334,19 +334,27 @@ TEST(StructureForces, FungTensionIsFungInTensionBoundedAndLinearInCompression) {
   const SpringLaw& law = find_spring_law("fung_tension");
   const SpringLaw& fung = find_spring_law("fung");
   const double c = 0.0133, a = 49.56, q_cap = 4;
+  const LawParams lp{q_cap, 0};
   const double eps_cap = std::sqrt(q_cap / a);
   for (double e : {0.01, 0.1, 0.2, eps_cap})
-    EXPECT_NEAR(law.stress(e, c, a, q_cap), fung.stress(e, c, a, q_cap), 1e-12 * fung.stress(e, c, a, q_cap)) << e;
+    EXPECT_NEAR(law.stress(e, c, a, lp), fung.stress(e, c, a, lp), 1e-12 * fung.stress(e, c, a, lp)) << e;
   for (double e : {-0.05, -0.3, -0.6}) {
-    EXPECT_DOUBLE_EQ(law.stress(e, c, a, q_cap), c * a * e);
-    EXPECT_DOUBLE_EQ(law.tangent(e, c, a, q_cap), c * a);
+    EXPECT_DOUBLE_EQ(law.stress(e, c, a, lp), c * a * e);
+    EXPECT_DOUBLE_EQ(law.tangent(e, c, a, lp), c * a);
   }
   const double k_max = c * a * std::exp(q_cap) * (1 + 2 * q_cap);
   const double h = 1e-7;
-  EXPECT_NEAR(law.stress(eps_cap + h, c, a, q_cap) - law.stress(eps_cap - h, c, a, q_cap), 2 * h * k_max,
+  EXPECT_NEAR(law.stress(eps_cap + h, c, a, lp) - law.stress(eps_cap - h, c, a, lp), 2 * h * k_max,
               1e-4 * 2 * h * k_max);  // C1 at the cap
-  for (double e : {eps_cap + 0.01, 0.5, 0.9}) EXPECT_DOUBLE_EQ(law.tangent(e, c, a, q_cap), k_max) << e;
-  EXPECT_LT(law.stress(0.5, c, a, q_cap), fung.stress(0.5, c, a, q_cap));
+  for (double e : {eps_cap + 0.01, 0.5, 0.9}) EXPECT_DOUBLE_EQ(law.tangent(e, c, a, lp), k_max) << e;
+  EXPECT_LT(law.stress(0.5, c, a, lp), fung.stress(0.5, c, a, lp));
+  // compression_fraction r: r = 1 is the capped Fung law in compression too; r = 0.5 halfway.
+  const LawParams sym{q_cap, 1}, half{q_cap, 0.5};
+  for (double e : {-0.05, -0.2}) {
+    EXPECT_NEAR(law.stress(e, c, a, sym), fung.stress(e, c, a, lp), 1e-12 * std::abs(fung.stress(e, c, a, lp))) << e;
+    EXPECT_NEAR(law.stress(e, c, a, half), 0.5 * (c * a * e + fung.stress(e, c, a, lp)), 1e-12) << e;
+  }
+  EXPECT_NEAR(law.stress(-0.5, c, a, sym), -law.stress(0.5, c, a, sym), 1e-12);  // odd when r = 1
 }
 
 // Length-tension (ours, ShellOptions::active_min_fibre_stretch = m): the active forces stay minus

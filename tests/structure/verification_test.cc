@@ -108,7 +108,7 @@ double predicted_lambda(const SpringLaw& law, double p, double s, double r0, dou
   double lo = 1, hi = 1.6;
   for (int k = 0; k < 200; ++k) {
     const double mid = 0.5 * (lo + hi);
-    const double pm = 3 * s * law.stress(1 - 1 / mid, kCLv, alpha, 4.0) / (mid * mid * mid * r0);
+    const double pm = 3 * s * law.stress(1 - 1 / mid, kCLv, alpha, LawParams{}) / (mid * mid * mid * r0);
     (pm < p ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
