@@ -558,7 +558,7 @@ void ShellModel::compute_forces() {
     add_active_forces(x_, force_);
     for (const ActiveTriangle& t : active_) {
       const double tau = (active_tension_kpa_[t.a] + active_tension_kpa_[t.b] + active_tension_kpa_[t.c]) / 3;
-      if (tau == 0) continue;
+      if (tau == 0 || (t.w0 == 0 && t.w1 == 0)) continue;  // no fibre: no active force (as in add_active_forces)
       const double lam = (t.w0 * (x_[t.b] - x_[t.a]) + t.w1 * (x_[t.c] - x_[t.a])).norm();
       const LengthTension lt = length_tension(lam, options_.active_min_fibre_stretch);
       // transverse tau f / lambda and axial tau f' (the length-tension slope)
