@@ -8,6 +8,13 @@
 namespace systole::config {
 namespace {
 
+// The in-plane spring laws of solver/structure/spring_law.h (structure.law and
+// electromechanics.spring_law choose among the same registry).
+const std::vector<std::string_view>& spring_law_names() {
+  static const std::vector<std::string_view> names{"fung", "linear", "neo_hookean", "fung_tension"};
+  return names;
+}
+
 // Each row's path is the member path in config::Scenario, stringified, so the table and the
 // struct cannot drift apart; the proto is kept in step by tests/unit/config_proto_test.cc.
 #define SYSTOLE_REAL(member, unit, def, lo, hi, doc)                                       \
@@ -372,7 +379,7 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(analytic.b, "", 0.1, -100, 100, "Ishigami b (benchmark value 0.1)."));
   // --- structure and scene "mechanics" (solver/structure/README.md) ---------------------
   t.push_back(SYSTOLE_CHOICE(structure.law, "fung",
-                             (std::vector<std::string_view>{"fung", "linear", "neo_hookean", "fung_tension"}),
+                             spring_law_names(),
                              "In-plane spring law of every tissue (eq 17 'fung'; 'linear', 'neo_hookean' and "
                              "'fung_tension' share its small-strain modulus c alpha; 'fung_tension', ours: the Fung "
                              "exponential in tension only, capped at structure.fung_exponent_cap, linear in "
@@ -480,7 +487,7 @@ std::vector<Param> build_table() {
                            "plane's anchor ring carry no active tension (ours: the fibrous annulus is not muscle); "
                            "0: none."));
   t.push_back(SYSTOLE_CHOICE(electromechanics.spring_law, "fung_tension",
-                             (std::vector<std::string_view>{"fung", "linear", "neo_hookean", "fung_tension"}),
+                             spring_law_names(),
                              "Scene 'electromechanics': in-plane spring law of the LV and LA walls, used instead of "
                              "structure.law (calibrated: docs/electromechanics.md)."));
   t.push_back(SYSTOLE_BOOL(electromechanics.bending, false,
