@@ -106,9 +106,9 @@ std::vector<Param> build_table() {
                                     "Tissue density, every body (seed)."));
   t.push_back(SYSTOLE_REAL(tissue.poisson_ratio, "", 0.5, 0, 0.5,
                            "Poisson ratio nu_m in the bending stiffness (eq 19)."));
-  t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 270, 0, 1000,
+  t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 340, 0, 1000,
                            "Nash-Panfilov active tension amplitude k_tau (Nash & Panfilov 2004: "
-                           "47.9 kPa); 270 calibrated by the electromechanics scene (docs/electromechanics.md)."));
+                           "47.9 kPa); 340 calibrated by the electromechanics scene (docs/electromechanics.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(tissue.active_tension_time_scale_ms, "ms", 20, 0, 1000,
                                     "Nash-Panfilov time unit t_scale (eq 23): the tension rises with time constant "
                                     "10 t_scale and relaxes with t_scale (Nash & Panfilov 2004: 12.9 ms; 20 ms "
@@ -320,9 +320,9 @@ std::vector<Param> build_table() {
                            "Closed-valve conductance as a fraction of the open one (leak); must be "
                            "> 0 with external chambers."));
   t.push_back(SYSTOLE_REAL(lumped.aortic_characteristic_impedance_mmhg_s_per_ml, "mmHg*s/ml",
-                           0.035, 0, 10,
+                           0.025, 0, 10,
                            "Three-element Windkessel characteristic impedance Zc (aortic root "
-                           "to C)."));
+                           "to C); 0.025 chosen with the electromechanics scene (solver/lumped/README.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(lumped.systemic_resistance_mmhg_s_per_ml, "mmHg*s/ml", 1.05, 0,
                                     20,
                                     "Windkessel peripheral resistance R, into the pulmonary "
@@ -482,7 +482,7 @@ std::vector<Param> build_table() {
                              (std::vector<std::string_view>{"lumped", "shell"}),
                              "Scene 'electromechanics': the LA as the 0-D elastance chamber or as a 3-D shell wall "
                              "(experimental: the constraint does not hold it yet, docs/electromechanics.md)."));
-  t.push_back(SYSTOLE_REAL(electromechanics.passive_annulus_mm, "mm", 6, 0, 50,
+  t.push_back(SYSTOLE_REAL(electromechanics.passive_annulus_mm, "mm", 10, 0, 50,
                            "Scene 'electromechanics': wall nodes within this distance (stress-free) of the valvular "
                            "plane's anchor ring carry no active tension (ours: the fibrous annulus is not muscle); "
                            "0: none."));
