@@ -123,6 +123,18 @@ void FluidSolver::set_velocity(const VelocityFunction& fu, const VelocityFunctio
   check_stability(0.0);
 }
 
+void FluidSolver::set_pressure(const VelocityFunction& fp) {
+  const grid::Grid& g = slabs_.grid();
+  using grid::Location;
+  for (int k = 0; k < p_.k_count(); ++k) {
+    const int kg = slabs_.k_begin() + k;
+    for (int j = 0; j < g.ny(); ++j)
+      for (int i = 0; i < g.nx(); ++i)
+        p_(i, j, k) = fp(g.x(Location::cell, i), g.y(Location::cell, j), g.z(Location::cell, kg));
+  }
+  grid::exchange_halos(p_, slabs_);
+}
+
 double FluidSolver::choose_time_step(double t_limit) const {
   const grid::Grid& g = slabs_.grid();
   double dt = par_.max_dt;
@@ -629,6 +641,44 @@ void FluidSolver::restore_checkpoint(const std::filesystem::path& file) {
   kinetic_energy_ = 0;
   check_stability(0.0);  // restores the velocity maxima that pick the next Δt
   kinetic_energy_ = f.read_attribute("kinetic_energy");
+}
+
+void FluidSolver::save_state(State& out) const {
+  out.vel.u = vel_.u;
+  out.vel.v = vel_.v;
+  out.vel.w = vel_.w;
+  out.h_prev.u = h_prev_->u;
+  out.h_prev.v = h_prev_->v;
+  out.h_prev.w = h_prev_->w;
+  out.p = p_;
+  out.time = time_;
+  out.dt_prev = dt_prev_;
+  out.kinetic_energy = kinetic_energy_;
+  out.nu_max = nu_max_;
+  out.max_u = max_u_;
+  out.max_v = max_v_;
+  out.max_w = max_w_;
+  out.steps = steps_;
+  out.have_history = have_history_;
+}
+
+void FluidSolver::restore_state(const State& in) {
+  vel_.u = in.vel.u;
+  vel_.v = in.vel.v;
+  vel_.w = in.vel.w;
+  h_prev_->u = in.h_prev.u;
+  h_prev_->v = in.h_prev.v;
+  h_prev_->w = in.h_prev.w;
+  p_ = in.p;
+  time_ = in.time;
+  dt_prev_ = in.dt_prev;
+  kinetic_energy_ = in.kinetic_energy;
+  nu_max_ = in.nu_max;
+  max_u_ = in.max_u;
+  max_v_ = in.max_v;
+  max_w_ = in.max_w;
+  steps_ = in.steps;
+  have_history_ = in.have_history;
 }
 
 void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelection which) const {

@@ -91,6 +91,10 @@ class FluidSolver {
   // divergence-free fields, zeroes p and the AB2 history, keeps t. Collective.
   using VelocityFunction = std::function<double(double x, double y, double z)>;
   void set_velocity(const VelocityFunction& u, const VelocityFunction& v, const VelocityFunction& w);
+  // Sets p(x,y,z) at the cell centres (an initial state, e.g. hydrostatic under a uniform body
+  // force; the next projection keeps it as the starting pressure of eq 10). Halos exchanged.
+  // Collective.
+  void set_pressure(const VelocityFunction& p);
   void set_body_force(BodyForce force);
   void set_time(double t) { time_ = t; }
 
@@ -110,6 +114,24 @@ class FluidSolver {
   // HDF5; restore makes the continued run equal a straight run bitwise. Collective.
   void write_checkpoint(const std::filesystem::path& file) const;
   void restore_checkpoint(const std::filesystem::path& file);
+  // The same state in memory, for strong coupling's repeated intervals (coupling::FluidModule):
+  // a run continued after restore_state(s) equals the run continued after save_state(s)
+  // bitwise. Each rank saves its own slab (not collective). The body-force hook is not state.
+  struct State {
+    explicit State(const grid::Slabs& slabs) : vel(slabs), h_prev(slabs), p(slabs) {}
+    Velocity vel, h_prev;
+    grid::CellField p;
+    double time = 0, dt_prev = 0, kinetic_energy = 0, nu_max = 0;
+    double max_u = 0, max_v = 0, max_w = 0;  // pick the next Δt
+    long steps = 0;
+    bool have_history = false;
+  };
+  void save_state(State& out) const;
+  void restore_state(const State& in);
+  // The Δt the next advance() would take without a time limit (CFL, viscous bound, max_dt),
+  // nondimensional. Carreau–Yasuda: with the largest ν of the last step (advance() updates ν
+  // first, so its step can be smaller).
+  double stable_step() const { return choose_time_step(1e300); }
   // Velocity, pressure and vorticity at cell centres (+ XDMF sidecar for ParaView), the ones
   // `which` selects. Collective.
   struct FieldSelection {
