@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "solver/geometry/topology.h"
 
@@ -98,6 +99,57 @@ TriMesh tile(const TriMesh& mesh, int m) {
                            mesh.thickness_mm[t], mesh.fibre[t]);
       }
   }
+  return out;
+}
+
+TilingMap tiling_map(const TriMesh& mesh, int m) {
+  if (m < 1) throw std::invalid_argument("tiling_map: m must be >= 1");
+  TilingMap map;
+  map.m = m;
+  auto add = [&](std::array<std::int32_t, 3> p, std::array<double, 3> w, int n) {
+    map.parent.push_back(p);
+    map.weight.push_back(w);
+    map.count.push_back(static_cast<std::uint8_t>(n));
+  };
+  const std::size_t n0 = mesh.node_count();
+  for (std::size_t n = 0; n < n0; ++n) add({static_cast<std::int32_t>(n), 0, 0}, {1.0, 0.0, 0.0}, 1);
+  if (m == 1) return map;
+  // The numbering of tile(): edge nodes edge by edge (k = 1..m-1 at k/m from edge[e][0]: tile()
+  // computes the point from the lexicographically smaller end, the same point), then each
+  // triangle's interior lattice points row by row.
+  const EdgeTopology topo(mesh);
+  for (std::size_t e = 0; e < topo.edge_count(); ++e) {
+    const auto [a, b] = topo.edge[e];
+    for (int k = 1; k < m; ++k) {
+      const double f = static_cast<double>(k) / m;
+      add({a, b, 0}, {1.0 - f, f, 0.0}, 2);
+    }
+  }
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const auto [a, b, c] = mesh.tri[t];
+    for (int j = 1; j < m; ++j)
+      for (int i = 1; i + j < m; ++i) {
+        const double fi = static_cast<double>(i) / m, fj = static_cast<double>(j) / m;
+        add({a, b, c}, {1.0 - fi - fj, fi, fj}, 3);
+      }
+  }
+  return map;
+}
+
+std::vector<Vec3> TilingMap::interpolate(const std::vector<Vec3>& parent_values) const {
+  std::vector<Vec3> out(size(), Vec3::Zero());
+  for (std::size_t n = 0; n < size(); ++n)
+    for (int k = 0; k < count[n]; ++k) out[n] += weight[n][k] * parent_values.at(parent[n][k]);
+  return out;
+}
+
+std::vector<Vec3> TilingMap::spread(const std::vector<Vec3>& tiled_values, std::size_t parent_count) const {
+  if (tiled_values.size() != size())
+    throw std::invalid_argument("TilingMap::spread: " + std::to_string(tiled_values.size()) + " values for " +
+                                std::to_string(size()) + " tiled nodes");
+  std::vector<Vec3> out(parent_count, Vec3::Zero());
+  for (std::size_t n = 0; n < size(); ++n)
+    for (int k = 0; k < count[n]; ++k) out.at(parent[n][k]) += weight[n][k] * tiled_values[n];
   return out;
 }
 

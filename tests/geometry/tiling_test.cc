@@ -114,5 +114,50 @@ TEST(Tiling, MarkerHeartAtGridOneIsCleanAndDisjoint) {
   EXPECT_NEAR(cavity_volume_ml(tiled[2], heart.plane.z_mm), 40.0, 1e-9);
 }
 
+// The tiling map (the structure mesh <-> the marker mesh of the IB): it reproduces tile()'s
+// nodes, interpolates linearly, and its transpose conserves force and moment.
+TEST(Tiling, MapReproducesTheTiledNodesAndItsTransposeConservesForceAndMoment) {
+  const TriMesh& lv = default_heart().body(kLvBody);
+  for (int m : {1, 2, 4}) {
+    const TriMesh t = tile(lv, m);
+    const TilingMap map = tiling_map(lv, m);
+    ASSERT_EQ(map.size(), t.node_count()) << "m = " << m;
+    const std::vector<Vec3> x = map.interpolate(lv.position_mm);
+    double worst = 0, worst_sum = 0;
+    for (std::size_t n = 0; n < x.size(); ++n) {
+      worst = std::max(worst, (x[n] - t.position_mm[n]).norm());
+      double s = 0;
+      for (int k = 0; k < map.count[n]; ++k) {
+        EXPECT_GE(map.weight[n][k], 0.0);
+        s += map.weight[n][k];
+      }
+      worst_sum = std::max(worst_sum, std::abs(s - 1));
+    }
+    // Forces on the tiled nodes spread back: same total force and moment about the origin.
+    std::vector<Vec3> f(map.size());
+    for (std::size_t n = 0; n < f.size(); ++n)
+      f[n] = Vec3(std::sin(0.37 * n), std::cos(0.11 * n), 0.5 - std::sin(0.05 * n));
+    const std::vector<Vec3> back = map.spread(f, lv.node_count());
+    Vec3 f_tiled = Vec3::Zero(), f_parent = Vec3::Zero(), m_tiled = Vec3::Zero(), m_parent = Vec3::Zero();
+    for (std::size_t n = 0; n < f.size(); ++n) {
+      f_tiled += f[n];
+      m_tiled += x[n].cross(f[n]);
+    }
+    for (std::size_t n = 0; n < back.size(); ++n) {
+      f_parent += back[n];
+      m_parent += lv.position_mm[n].cross(back[n]);
+    }
+    std::printf("  [measured] m = %d: %zu tiled nodes, max |x_map - x_tile| %.2g mm, force %.2g, moment %.2g "
+                "(relative)\n", m, map.size(), worst, (f_tiled - f_parent).norm() / f_tiled.norm(),
+                (m_tiled - m_parent).norm() / m_tiled.norm());
+    EXPECT_LT(worst, 1e-12 * 100);  // positions ~ 100 mm
+    EXPECT_LT(worst_sum, 1e-15);
+    EXPECT_LT((f_tiled - f_parent).norm(), 1e-12 * f_tiled.norm());
+    EXPECT_LT((m_tiled - m_parent).norm(), 1e-12 * m_tiled.norm());
+  }
+  EXPECT_THROW(tiling_map(lv, 0), std::invalid_argument);
+  EXPECT_THROW(tiling_map(lv, 2).spread(std::vector<Vec3>(3), lv.node_count()), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace systole::geometry
