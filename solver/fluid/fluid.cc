@@ -42,6 +42,8 @@ void validate(const FluidParameters& p, const grid::Grid& g) {
   if (!(p.time_scale_s > 0)) bad("time_scale_s", p.time_scale_s, "(0, inf)");
   if (!(p.abort_cfl > 0)) bad("abort_cfl", p.abort_cfl, "(0, inf)");
   if (!(p.abort_energy_growth > 1)) bad("abort_energy_growth", p.abort_energy_growth, "(1, inf)");
+  if (!(p.abort_energy_floor >= 0 && std::isfinite(p.abort_energy_floor)))
+    bad("abort_energy_floor", p.abort_energy_floor, "[0, inf)");
   if (p.viscosity_model != "newtonian" && p.viscosity_model != "carreau_yasuda")
     throw InputError("fluid.viscosity_model = '" + p.viscosity_model + "' is unknown; known: newtonian, carreau_yasuda");
   if (p.viscosity_model == "carreau_yasuda") validate(p.carreau_yasuda);
@@ -511,7 +513,8 @@ void FluidSolver::check_stability(double dt) {
     what << "realised CFL " << cfl << " > abort_cfl " << par_.abort_cfl << " with dt = " << dt;
     throw InstabilityError("fluid", place.str(), time_s, what.str());
   }
-  if (dt > 0 && kinetic_energy_ > 0 && ke_new > par_.abort_energy_growth * kinetic_energy_) {
+  if (dt > 0 && kinetic_energy_ > 0 && ke_new > par_.abort_energy_floor &&
+      ke_new > par_.abort_energy_growth * kinetic_energy_) {
     std::ostringstream place, what;
     place << "step " << steps_ << " (max |u|,|v|,|w| = " << global[0] << ", " << global[1] << ", " << global[2] << ")";
     what << "kinetic energy grew by a factor " << ke_new / kinetic_energy_ << " > abort_energy_growth "

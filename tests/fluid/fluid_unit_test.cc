@@ -247,6 +247,37 @@ TEST(FluidSolver, BlowUpIsDetectedByEnergyGrowthOrNonFiniteValues) {
   }
 }
 
+// A motion starting from rest: the body force jumps ×100 after the first step, so the energy
+// grows ~10⁴× in one step, but at a negligible level: below abort_energy_floor it is not a
+// blow-up; with the floor at 0 the same run is stopped by the growth check.
+TEST(FluidSolver, EnergyGrowthFromRestBelowTheFloorIsNotABlowUp) {
+  const Slabs s(Grid({8, 8, 8, 1, 1, 1}), MPI_COMM_WORLD);
+  auto run = [&](double floor) {
+    FluidParameters p;
+    p.reynolds = 100;
+    p.abort_energy_floor = floor;
+    FluidSolver f(s, p);
+    f.set_body_force([](const StepContext& c, const Velocity&, Velocity& force) {
+      const double fx = c.step == 0 ? 1e-4 : 1e-2;
+      for (int k = 0; k < force.u.k_count(); ++k)
+        for (int j = 0; j < 8; ++j)
+          for (int i = 0; i < 8; ++i) force.u(i, j, k) = fx;
+    });
+    for (int n = 0; n < 5; ++n) f.advance();
+    return f.diagnostics().kinetic_energy;
+  };
+  double ke = 0;
+  EXPECT_NO_THROW(ke = run(1e-4));
+  std::printf("  [measured] kinetic energy after 5 steps %.3g (floor 1e-4)\n", ke);
+  EXPECT_LT(ke, 1e-4);
+  try {
+    run(0.0);
+    FAIL() << "the growth check did not fire without the floor";
+  } catch (const InstabilityError& e) {
+    EXPECT_NE(std::string(e.what()).find("kinetic energy grew"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FluidSolver, DarcySinkStopsTheFlowInItsRegion) {
   const Grid g({8, 8, 8, 1, 1, 1});
   const Slabs s(g, MPI_COMM_WORLD);
