@@ -6,6 +6,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <time.h>
+
 #include "solver/core/errors.h"
 
 namespace systole::electro {
@@ -14,6 +16,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+// CPU seconds of the calling thread.
+double thread_cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 // [[A, B], [B^T, C]] with the rows/columns in `pinned` (indices into the full block) replaced
@@ -178,8 +186,17 @@ TissueSolver::TissueSolver(ElectroMesh mesh, TissueOptions options)
     for (auto p : pinned_) pins_block.push_back(p + static_cast<std::int32_t>(n));
     const double th = thetas[needed];
     const SparseMatrix A = SparseMatrix(mass_ * (c / dts[needed])) + SparseMatrix(k_i_ * th);
-    solve_[needed] = factorise(block_with_pins(A, SparseMatrix(k_i_ * th), SparseMatrix(k_sum_ * th), pins_block),
-                               "bidomain block system");
+    const SparseMatrix block = block_with_pins(A, SparseMatrix(k_i_ * th), SparseMatrix(k_sum_ * th), pins_block);
+    if (options_.reference_block_solver)
+      solve_[needed] = factorise(block, "bidomain block system");
+    else
+      block_solve_[needed] = std::make_unique<NodePairLdlt>(block, "bidomain block system");
+    // Lumped mass per component, summed in node order (zero_mean_ue).
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto comp = static_cast<std::size_t>(component_[i]);
+      if (comp >= ue_weight_.size()) ue_weight_.resize(comp + 1, 0.0);
+      ue_weight_[comp] += lumped_[static_cast<Eigen::Index>(i)];
+    }
     if (options_.splitting == Splitting::kStrang) {
       // (K_i + K_e) with the same pins, for the explicit half of Crank–Nicolson.
       std::vector<Eigen::Triplet<double>> t;
@@ -202,6 +219,7 @@ std::size_t TissueSolver::diffusion_unknowns() const {
 
 void TissueSolver::reaction(double t_ms, double dt_ms) {
   const auto t0 = Clock::now();
+  const double cpu0 = thread_cpu_s();
   // Gather Vm, advance the cell model, scatter -dt Iion: per node, so disjoint node ranges are
   // independent and run on options_.threads OpenMP threads. A zero-length compute() first lets
   // a model build its per-dt tables (TTP06 lookup table) before the threads read them.
@@ -231,35 +249,33 @@ void TissueSolver::reaction(double t_ms, double dt_ms) {
     for (auto i : s.nodes()) vm_[i] += dt_ms * a / options_.cm_uf_per_cm2;
   }
   reaction_s_ += seconds_since(t0);
+  reaction_cpu_s_ += thread_cpu_s() - cpu0;
 }
 
 void TissueSolver::zero_mean_ue() {
-  std::vector<double> sum, weight;
-  for (std::size_t i = 0; i < ue_.size(); ++i) {
-    const auto c = static_cast<std::size_t>(component_[i]);
-    if (c >= sum.size()) {
-      sum.resize(c + 1, 0.0);
-      weight.resize(c + 1, 0.0);
-    }
-    sum[c] += lumped_[static_cast<Eigen::Index>(i)] * ue_[i];
-    weight[c] += lumped_[static_cast<Eigen::Index>(i)];
-  }
-  for (std::size_t i = 0; i < ue_.size(); ++i) ue_[i] -= sum[component_[i]] / weight[component_[i]];
+  std::vector<double>& sum = ue_sum_;
+  sum.assign(ue_weight_.size(), 0.0);
+  for (std::size_t i = 0; i < ue_.size(); ++i)
+    sum[component_[i]] += lumped_[static_cast<Eigen::Index>(i)] * ue_[i];
+  for (std::size_t i = 0; i < ue_.size(); ++i) ue_[i] -= sum[component_[i]] / ue_weight_[component_[i]];
 }
 
 void TissueSolver::diffusion(double tau_ms, double theta) {
   const auto t0 = Clock::now();
+  const double cpu0 = thread_cpu_s();
   const auto n = static_cast<Eigen::Index>(mesh_.node_count());
   const double c = options_.chi_per_cm * options_.cm_uf_per_cm2;
-  const Solver& S = *solve_[theta == 1.0 ? 0 : 1];
   const Eigen::Map<Eigen::VectorXd> v(vm_.data(), n);
   if (options_.formulation == Formulation::kMonodomain) {
+    const Solver& S = *solve_[theta == 1.0 ? 0 : 1];
     Eigen::VectorXd rhs = mass_ * v * (c / tau_ms);
     if (theta < 1.0) rhs -= (1.0 - theta) * (k_mono_ * v);
     const Eigen::VectorXd x = S.solve(rhs);
     Eigen::Map<Eigen::VectorXd>(vm_.data(), n) = x;
   } else {
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+    Eigen::VectorXd& rhs = rhs_;
+    rhs.resize(2 * n);
+    rhs.tail(n).setZero();
     rhs.head(n) = mass_ * v * (c / tau_ms);
     if (theta < 1.0) {
       // Explicit half: -K_i (v + u_e*) with u_e* solving the elliptic equation for this v.
@@ -269,12 +285,17 @@ void TissueSolver::diffusion(double tau_ms, double theta) {
       rhs.head(n) -= (1.0 - theta) * (k_i_ * (v + ue_star));
     }
     for (auto p : pinned_) rhs[n + p] = 0.0;
-    const Eigen::VectorXd x = S.solve(rhs);
-    Eigen::Map<Eigen::VectorXd>(vm_.data(), n) = x.head(n);
-    Eigen::Map<Eigen::VectorXd>(ue_.data(), n) = x.tail(n);
+    const int which = theta == 1.0 ? 0 : 1;
+    if (block_solve_[which])
+      block_solve_[which]->solve(rhs, x_);
+    else
+      x_ = solve_[which]->solve(rhs);
+    Eigen::Map<Eigen::VectorXd>(vm_.data(), n) = x_.head(n);
+    Eigen::Map<Eigen::VectorXd>(ue_.data(), n) = x_.tail(n);
     zero_mean_ue();
   }
   diffusion_s_ += seconds_since(t0);
+  diffusion_cpu_s_ += thread_cpu_s() - cpu0;
 }
 
 void TissueSolver::step() {
