@@ -42,7 +42,7 @@ void FluidModule::step(double dt_ms) {
     moved_ = false;
   }
   const double t_end = fluid_.time() + dt_ms / options_.time_scale_ms;
-  fluid_.advance(t_end);  // lands on t_end: the scheduler never asks for more than the limit
+  fluid_.advance(t_end);  // lands on t_end when dt_ms is within the limit (header: otherwise short)
 }
 
 void FluidModule::set_body_nodes(int body, const std::vector<ibm::Vec3>& position,

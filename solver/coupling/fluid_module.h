@@ -9,8 +9,10 @@
 // - Clock: the fluid's nondimensional time × time_scale_ms (d_m/U_m in ms: 40 ms in the seed).
 // - max_step_ms(): the fluid's stable step (FluidSolver::stable_step: CFL, viscous bound,
 //   max_dt) from the current state, in ms. step(dt_ms): exactly one fluid step of dt_ms (eq 1–2,
-//   8–10 with the direct forcing of eq 3). The fluid throws InstabilityError ("fluid", the cell,
-//   the time) on a blow-up; its state is then garbage and the run stops.
+//   8–10 with the direct forcing of eq 3). Asked for more than its limit (only the scheduler's
+//   test hook does), the fluid takes its own smaller step and the module's clock falls short of
+//   the target; the scheduler then sub-cycles on. The fluid throws InstabilityError ("fluid", the
+//   cell, the time) on a blow-up; its state is then garbage and the run stops.
 // - Inputs, held over the substeps of a synchronisation interval: the node positions and
 //   velocities of each deformable immersed body (set_body_nodes, grid units = d_m), written by
 //   the scene's transfers from the structure. Stencils are rebuilt before the next step when a
