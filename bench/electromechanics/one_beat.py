@@ -11,11 +11,10 @@ faster run can be checked against a slower one.
 
 usage: one_beat.py SYSTOLE_SOLVE OUT_DIR [--only default|monodomain]
 """
-import json
 import os
-import subprocess
 import sys
-import time
+
+from em_run import solve_case
 
 CASES = {
     "default": {},
@@ -27,18 +26,9 @@ def run(solve, out_dir, name, overrides):
     scenario = {"scene": "electromechanics", "beats": 1,
                 "electromechanics": {"field_interval_ms": 0}}
     scenario.update(overrides)
-    case = os.path.join(out_dir, name)
-    os.makedirs(case, exist_ok=True)
-    path = os.path.join(case, "scenario.json")
-    with open(path, "w") as f:
-        json.dump(scenario, f)
-    start = time.monotonic()
-    proc = subprocess.run([solve, path, "--out", case, "--quiet"], capture_output=True, text=True)
-    wall_s = time.monotonic() - start
-    if proc.returncode != 0:
-        sys.exit(f"{name}: systole-solve failed (rc {proc.returncode}): {proc.stderr.strip()[-400:]}")
-    with open(os.path.join(case, "metrics.json")) as f:
-        m = json.load(f)
+    wall_s, error, m = solve_case(solve, os.path.join(out_dir, name), scenario)
+    if error:
+        sys.exit(f"{name}: systole-solve failed ({error})")
     return wall_s, m
 
 

@@ -12,9 +12,9 @@ usage: runtime_vs_error.py SYSTOLE_SOLVE OUT_DIR [--edges 2,2.5,3] [--syncs 0.5,
 import csv
 import json
 import os
-import subprocess
 import sys
-import time
+
+from em_run import solve_case
 
 METRICS = [("ejection_fraction_percent", "EF %"), ("cardiac_output_l_min", "CO l/min"),
            ("lv_peak_pressure_mmhg", "peak mmHg"), ("lv_twist_end_systole_deg", "twist deg")]
@@ -25,19 +25,9 @@ def run(solve, out_dir, edge_mm, sync_ms):
                 "geometry": {"target_edge_mm": edge_mm},
                 "electro": {"model": "monodomain", "time_step_ms": 0.1},
                 "electromechanics": {"sync_step_ms": sync_ms, "field_interval_ms": 0}}
-    case = os.path.join(out_dir, f"edge{edge_mm}_sync{sync_ms}")
-    os.makedirs(case, exist_ok=True)
-    path = os.path.join(case, "scenario.json")
-    with open(path, "w") as f:
-        json.dump(scenario, f)
-    start = time.monotonic()
-    proc = subprocess.run([solve, path, "--out", case, "--quiet"], capture_output=True, text=True)
-    wall = time.monotonic() - start
-    if proc.returncode != 0:
-        return {"edge_mm": edge_mm, "sync_ms": sync_ms, "wall_s": wall, "error": proc.stderr.strip()[-300:]}
-    with open(os.path.join(case, "metrics.json")) as f:
-        m = json.load(f)
-    m = m.get("metrics", m)
+    wall, error, m = solve_case(solve, os.path.join(out_dir, f"edge{edge_mm}_sync{sync_ms}"), scenario)
+    if error:
+        return {"edge_mm": edge_mm, "sync_ms": sync_ms, "wall_s": wall, "error": error[-300:]}
     row = {"edge_mm": edge_mm, "sync_ms": sync_ms, "wall_s": wall, "error": ""}
     for key, _ in METRICS:
         row[key] = m[key]
