@@ -47,7 +47,13 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const systole::RunResult r = systole::scene::run_ibm_case(s, MPI_COMM_WORLD);
+  // Progress on stderr after each sample, so a long run shows its trend before it ends.
+  const auto progress = [rank](const systole::ProgressReport& p) {
+    if (rank != 0) return;
+    std::fprintf(stderr, "progress t=%g fraction=%.3f %s\n", p.simulated_time_s, p.fraction, p.message.c_str());
+    std::fflush(stderr);
+  };
+  const systole::RunResult r = systole::scene::run_ibm_case(s, MPI_COMM_WORLD, 1.0, progress);
   if (rank == 0) {
     for (const auto& [k, v] : r.metrics) std::printf("%s = %.6g\n", k.c_str(), v);
     if (const char* series = std::getenv("IBM_SERIES"); series && *series) {

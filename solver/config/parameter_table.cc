@@ -500,6 +500,36 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(electromechanics.field_interval_ms, "ms", 50, 0, 1e4,
                            "Scene 'electromechanics': node positions, Vm and active tension every this over "
                            "the last beat (em_fields.h5 + .xmf); 0: none."));
+  // --- scenes "fsei" and "fsi" (solver/scene/fsei_scene.h) ----------------------------------
+  t.push_back(SYSTOLE_CHOICE(fsei.resolution, "coarse",
+                             (std::vector<std::string_view>{"coarse", "basic", "fine", "very_fine", "custom"}),
+                             "Scenes 'fsei'/'fsi': fluid grid preset in points: coarse 65x65x73, basic 129x129x145 "
+                             "(the seed's grid 1), fine 193x193x257, very_fine 257x257x290; custom: fluid.nx/ny/nz. "
+                             "The markers' tiling follows the grid."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fsei.sync_step_ms, "ms", 0.1, 0, 5,
+                                    "Scenes 'fsei'/'fsi': synchronisation step of the multirate scheduler (fsei: a "
+                                    "multiple of electro.time_step_ms); also the fluid's largest step."));
+  t.push_back(SYSTOLE_REAL(fsei.end_time_ms, "ms", 0, 0, 1e6,
+                           "Scenes 'fsei'/'fsi': simulated time from the start of systole; 0: beats x period."));
+  t.push_back(SYSTOLE_REAL(fsei.prescribed_peak_tension_kpa, "kPa", 60, 0, 1000,
+                           "Scene 'fsi': peak active tension of the prescribed LV and LA waveform (the 0-D "
+                           "activation shape, lumped timing; ours)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fsei.probe_radius_mm, "mm", 4, 0, 20,
+                                    "Scenes 'fsei'/'fsi': radius of the pressure probe spheres in the LV, LA, aortic "
+                                    "root and outer fluid (chamber pressures are their mean pressures, relative to the "
+                                    "outer probe; ours)."));
+  t.push_back(SYSTOLE_BOOL(fsei.strong_coupling, false,
+                           "Scenes 'fsei'/'fsi': strong coupling (fluid and structure repeated per interval, "
+                           "coupling.strong_tolerance and strong_max_iterations) instead of the seed's loose "
+                           "coupling."));
+  t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over, false,
+                           "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
+                           "(ours; it made the membrane sphere tight but set off an oscillation in the heart "
+                           "within 10 ms: docs/fsei.md)."));
+  t.push_back(SYSTOLE_INT(fsei.forcing_iterations, "", 3, 1, 20,
+                          "Scenes 'fsei'/'fsi': direct-forcing passes per fluid step (multi-direct forcing; 3 "
+                          "cut the leak through the heart's walls 7x against the seed's single pass: "
+                          "docs/fsei.md)."));
   return t;
 }
 

@@ -194,6 +194,18 @@ struct Electromechanics {
   bool isotropic_passive;          // alpha_c = alpha_f for the LV and LA in this scene (ours)
 };
 
+// Scenes "fsei" and "fsi" (solver/scene/fsei_scene.h).
+struct Fsei {
+  std::string resolution;               // grid preset: coarse, basic, fine, very_fine, custom
+  double sync_step_ms;                  // scheduler synchronisation step
+  double end_time_ms;                   // 0: beats x period
+  double prescribed_peak_tension_kpa;   // fsi: peak of the activation waveform (ours)
+  double probe_radius_mm;               // pressure probe spheres
+  bool strong_coupling;                 // false: loose (the seed's)
+  bool forcing_carry_over;              // ibm::ForcingParameters::carry_over (ours)
+  int forcing_iterations;               // ibm::ForcingParameters::iterations
+};
+
 struct Scenario {
   std::string scene;
   double heart_rate_bpm;
@@ -211,6 +223,7 @@ struct Scenario {
   Structure structure;
   Ibm ibm;
   Electromechanics electromechanics;
+  Fsei fsei;
 
   double period_ms() const { return 60000.0 / heart_rate_bpm; }
 };

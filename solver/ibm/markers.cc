@@ -114,20 +114,23 @@ void Markers::check_body(const Body& b) const {
 }
 
 void Markers::update() {
-  for (const Body& b : bodies_) {
-    const auto& P = b.tiled.position_mm;
-    const double retraction = b.options.retraction_cells * h_;
-    for (std::size_t t = 0; t < b.marker_count; ++t) {
-      const std::size_t q = b.first_marker + t;
-      const auto& n = b.tiled.tri[t];
-      const Vec3 av = (P[n[1]] - P[n[0]]).cross(P[n[2]] - P[n[0]]);
-      const double two_a = av.norm();
-      m_.surface[q] = (P[n[0]] + P[n[1]] + P[n[2]]) / 3.0;
-      m_.area[q] = 0.5 * two_a;
-      m_.normal[q] = two_a > 0 ? Vec3(av / two_a) : Vec3::Zero();
-      m_.position[q] = m_.surface[q] - retraction * m_.normal[q];
-      m_.velocity[q] = (b.node_velocity[n[0]] + b.node_velocity[n[1]] + b.node_velocity[n[2]]) / 3.0;
-    }
+  for (std::size_t b = 0; b < bodies_.size(); ++b) update(static_cast<int>(b));
+}
+
+void Markers::update(int body) {
+  const Body& b = bodies_.at(body);
+  const auto& P = b.tiled.position_mm;
+  const double retraction = b.options.retraction_cells * h_;
+  for (std::size_t t = 0; t < b.marker_count; ++t) {
+    const std::size_t q = b.first_marker + t;
+    const auto& n = b.tiled.tri[t];
+    const Vec3 av = (P[n[1]] - P[n[0]]).cross(P[n[2]] - P[n[0]]);
+    const double two_a = av.norm();
+    m_.surface[q] = (P[n[0]] + P[n[1]] + P[n[2]]) / 3.0;
+    m_.area[q] = 0.5 * two_a;
+    m_.normal[q] = two_a > 0 ? Vec3(av / two_a) : Vec3::Zero();
+    m_.position[q] = m_.surface[q] - retraction * m_.normal[q];
+    m_.velocity[q] = (b.node_velocity[n[0]] + b.node_velocity[n[1]] + b.node_velocity[n[2]]) / 3.0;
   }
 }
 
@@ -167,7 +170,7 @@ void Markers::set_nodes(int body, const std::vector<Vec3>& position, const std::
   }
   b.tiled.position_mm = position;
   b.node_velocity = velocity;
-  update();
+  update(body);
 }
 
 }  // namespace systole::ibm

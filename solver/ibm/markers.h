@@ -100,8 +100,10 @@ class Markers {
   // Sets a deformable body's tiled node positions and velocities (grid units), then update().
   void set_nodes(int body, const std::vector<Vec3>& position, const std::vector<Vec3>& velocity);
 
-  // Recomputes marker position, normal, area, velocity from the bodies' nodes.
+  // Recomputes marker position, normal, area, velocity from the bodies' nodes (every body, or
+  // one: set_nodes touches only its own body's markers).
   void update();
+  void update(int body);
 
   const MarkerArrays& markers() const { return m_; }
   const std::vector<Body>& bodies() const { return bodies_; }

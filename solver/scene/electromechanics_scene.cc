@@ -41,6 +41,7 @@
 #include "solver/electro/tissue.h"
 #include "solver/geometry/diagnostics.h"
 #include "solver/geometry/left_heart.h"
+#include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/structure/shell.h"
@@ -208,25 +209,8 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   coupling::ElectroModule ep_module(tissue);
 
   // 3. the chamber walls (passive stiffness scaled, ours: docs/electromechanics.md "Calibration")
-  config::Tissue tissue_config = scenario.tissue;
-  tissue_config.lv.fung_c_pa *= em.passive_stiffness_scale;
-  tissue_config.la.fung_c_pa *= em.passive_stiffness_scale;
-  if (em.isotropic_passive) {
-    tissue_config.lv.alpha_c = tissue_config.lv.alpha_f;
-    tissue_config.la.alpha_c = tissue_config.la.alpha_f;
-  }
-  const structure::ShellMaterials materials = structure::materials_from_config(tissue_config);
-  structure::ShellOptions shell_options;
-  shell_options.law = em.spring_law;
-  shell_options.fung_exponent_cap = scenario.structure.fung_exponent_cap;
-  shell_options.fung_compression_fraction = scenario.structure.fung_compression_fraction;
-  shell_options.active_min_fibre_stretch = scenario.tissue.active_min_fibre_stretch;
-  shell_options.active_cross_fibre_fraction = scenario.tissue.active_cross_fibre_fraction;
-  shell_options.bending = em.bending;
-  shell_options.damping_per_ms = scenario.structure.damping_per_ms;
-  shell_options.time_step_safety = scenario.structure.time_step_safety;
-  shell_options.strain_limit = scenario.structure.strain_limit;
-  shell_options.cavity_plane_z_mm = heart.plane.z_mm;
+  const structure::ShellMaterials materials = chamber_wall_materials(scenario);
+  const structure::ShellOptions shell_options = chamber_wall_options(scenario, heart.plane.z_mm);
   std::vector<std::unique_ptr<Chamber>> chambers;
   auto add_chamber = [&](const std::string& name, const geometry::TriMesh& mesh, int body_index) {
     auto c = std::make_unique<Chamber>();
@@ -236,20 +220,9 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
     c->ep_node.assign(mesh.node_count(), -1);
     for (std::size_t k = 0; k < source.size(); ++k)
       if (source[k][0] == body_index) c->ep_node[static_cast<std::size_t>(source[k][1])] = static_cast<std::int32_t>(k);
-    // The fibrous annulus (ours): nodes within passive_annulus_mm of the anchor ring (stress-free
-    // positions) carry no active tension (the valvular plane's ring is not muscle; contracting
-    // triangles pulling on the fixed ring crumpled the edges next to it, docs/electromechanics.md).
-    if (em.passive_annulus_mm > 0) {
-      std::vector<Vec3> ring;
-      for (std::size_t i = 0; i < mesh.node_count(); ++i)
-        if (mesh.region[i] & geometry::kAnchor) ring.push_back(mesh.position_mm[i]);
-      for (std::size_t i = 0; i < mesh.node_count(); ++i)
-        for (const Vec3& r : ring)
-          if ((mesh.position_mm[i] - r).norm() <= em.passive_annulus_mm) {
-            c->ep_node[i] = -1;
-            break;
-          }
-    }
+    // The fibrous annulus (ours): the valvular plane's ring is not muscle; contracting triangles
+    // pulling on the fixed ring crumpled the edges next to it (docs/electromechanics.md).
+    clear_passive_annulus(mesh, em.passive_annulus_mm, c->ep_node);
     chambers.push_back(std::move(c));
   };
   add_chamber("lv", lv_mesh, 0);

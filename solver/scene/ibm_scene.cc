@@ -404,6 +404,8 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
       rep.beats_total = 1;
       rep.fraction = static_cast<double>(s) / spec.samples;
       rep.message = std::string("ibm ") + to_string(spec.case_name);
+      if (!drag_samples.empty())  // the latest interval's mean drag, so a long run shows its trend (ours)
+        rep.message += " drag_coefficient " + std::to_string(drag_samples.back());
       progress(rep);
     }
     if (cancel) {

@@ -1,0 +1,30 @@
+#pragma once
+// The LV and LA walls as scenes "electromechanics", "fsi" and "fsei" build them (calibrated in
+// docs/electromechanics.md): the tissue with the electromechanics section's passive scale and
+// isotropy, the walls' shell options, and the fibrous annulus that carries no active tension.
+#include <cstdint>
+#include <vector>
+
+#include "solver/config/scenario.h"
+#include "solver/geometry/tri_mesh.h"
+#include "solver/structure/shell.h"
+
+namespace systole::scene {
+
+// tissue.* with the LV and LA Fung c × electromechanics.passive_stiffness_scale and, when
+// electromechanics.isotropic_passive, alpha_c = alpha_f (ours).
+structure::ShellMaterials chamber_wall_materials(const config::Scenario& scenario);
+
+// structure.* options with the walls' law and bending from the electromechanics section, the
+// tissue's active options, and the cavity closed by the plane at plane_z_mm.
+structure::ShellOptions chamber_wall_options(const config::Scenario& scenario, double plane_z_mm);
+
+// The structure.* options for the other bodies (leaflets, aorta), cavity closed at plane_z_mm.
+structure::ShellOptions structure_options(const config::Scenario& scenario, double plane_z_mm);
+
+// Sets ep_node[i] = -1 (no active tension) for the nodes within distance_mm (stress-free
+// positions) of the mesh's anchor ring: the fibrous annulus is not muscle (ours). No-op for
+// distance_mm <= 0.
+void clear_passive_annulus(const geometry::TriMesh& mesh, double distance_mm, std::vector<std::int32_t>& ep_node);
+
+}  // namespace systole::scene

@@ -1,0 +1,619 @@
+#include "solver/scene/fsei_scene.h"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "solver/core/errors.h"
+#include "solver/core/units.h"
+#include "solver/coupling/body_group_module.h"
+#include "solver/coupling/electro_module.h"
+#include "solver/coupling/fluid_module.h"
+#include "solver/coupling/scheduler.h"
+#include "solver/electro/tissue.h"
+#include "solver/geometry/left_heart.h"
+#include "solver/geometry/tiling.h"
+#include "solver/lumped/activation.h"
+#include "solver/scene/chamber_walls.h"
+#include "solver/scene/electro_scene.h"
+#include "solver/structure/contact.h"
+#include "solver/structure/shell.h"
+
+namespace systole::scene {
+namespace {
+
+using geometry::Vec3;
+
+// The seed's scales (MODEL.md §3): lengths in d_m, velocities in U_m, times in d_m/U_m.
+constexpr double kDmMm = 1000 * units::kSeedLength_m;          // 24 mm
+constexpr double kUmMmPerMs = units::kSeedVelocity_m_s;        // 0.6 mm/ms
+constexpr double kTimeScaleMs = kDmMm / kUmMmPerMs;            // 40 ms
+constexpr double kMlPerMm3 = 1e-3;
+// The coarsest grid the valves allow (ours): the aortic orifice must span this many cells of
+// the largest spacing, or the closed cusps and the open orifice are not told apart.
+constexpr double kMinCellsAcrossAorticOrifice = 8;
+
+// A module whose clock is another's shifted by a constant (ours): EP runs from the LA stimulus,
+// the scene from the LV stimulus, av_delay later.
+class ShiftedClock final : public coupling::Module {
+ public:
+  ShiftedClock(coupling::Module& inner, double offset_ms) : inner_(inner), offset_ms_(offset_ms) {}
+  const std::string& name() const override { return inner_.name(); }
+  double time_ms() const override { return inner_.time_ms() - offset_ms_; }
+  double max_step_ms() const override { return inner_.max_step_ms(); }
+  void step(double dt_ms) override { inner_.step(dt_ms); }
+  void save() override { inner_.save(); }
+  void restore() override { inner_.restore(); }
+
+ private:
+  coupling::Module& inner_;
+  double offset_ms_;
+};
+
+// A sub-mesh with the same nodes and the triangles `keep` selects (the LA wall and its vein caps
+// become separate marker bodies that share the shell's nodes).
+geometry::TriMesh select_triangles(const geometry::TriMesh& mesh, const std::string& name,
+                                   const std::function<bool(std::size_t)>& keep) {
+  geometry::TriMesh out;
+  out.name = name;
+  out.kind = mesh.kind;
+  out.position_mm = mesh.position_mm;
+  out.region = mesh.region;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    if (!keep(t)) continue;
+    out.tri.push_back(mesh.tri[t]);
+    out.tissue.push_back(mesh.tissue[t]);
+    out.thickness_mm.push_back(mesh.thickness_mm[t]);
+    out.fibre.push_back(mesh.fibre[t]);
+  }
+  return out;
+}
+
+// A marker body driven by one shell: the tiling map from the shell's nodes to the body's tiled
+// nodes, and the loads' way back.
+struct Link {
+  int marker_body = -1;
+  std::size_t shell = 0;
+  geometry::TilingMap map;
+  bool cap = false;  // a pulmonary-vein cap (switched on and off)
+};
+
+// A sphere of cells whose mean pressure is a chamber's pressure.
+struct Probe {
+  std::string name;
+  Vec3 centre_mm;
+};
+
+// Mean pressure (nondimensional) over the cells whose centres lie within radius of each probe.
+// Collective. Throws InputError when a probe holds no cell centre.
+std::vector<double> probe_pressures(const fluid::FluidSolver& fluid, const std::vector<Probe>& probes,
+                                    double radius_mm) {
+  const grid::Slabs& slabs = fluid.slabs();
+  const grid::Grid& g = slabs.grid();
+  const grid::CellField& p = fluid.pressure();
+  const std::size_t n = probes.size();
+  std::vector<double> sum(2 * n, 0.0);
+  const double r = radius_mm / kDmMm;
+  for (std::size_t q = 0; q < n; ++q) {
+    const Vec3 c = probes[q].centre_mm / kDmMm;
+    const int k0 = std::max(slabs.k_begin(), static_cast<int>(std::floor((c.z() - r) / g.dz())));
+    const int k1 = std::min(slabs.k_begin() + slabs.k_count() - 1, static_cast<int>(std::ceil((c.z() + r) / g.dz())));
+    const int j0 = std::max(0, static_cast<int>(std::floor((c.y() - r) / g.dy())));
+    const int j1 = std::min(g.ny() - 1, static_cast<int>(std::ceil((c.y() + r) / g.dy())));
+    const int i0 = std::max(0, static_cast<int>(std::floor((c.x() - r) / g.dx())));
+    const int i1 = std::min(g.nx() - 1, static_cast<int>(std::ceil((c.x() + r) / g.dx())));
+    for (int k = k0; k <= k1; ++k)
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const Vec3 x(g.x(grid::Location::cell, i), g.y(grid::Location::cell, j), g.z(grid::Location::cell, k));
+          if ((x - c).norm() > r) continue;
+          sum[2 * q] += p(i, j, k - slabs.k_begin());
+          sum[2 * q + 1] += 1;
+        }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sum.data(), static_cast<int>(sum.size()), MPI_DOUBLE, MPI_SUM, slabs.comm());
+  std::vector<double> mean(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    if (sum[2 * q + 1] == 0)
+      throw InputError("fsei.probe_radius_mm = " + std::to_string(radius_mm) + " mm: the " + probes[q].name +
+                       " probe holds no cell centre; allowed: at least half the grid spacing");
+    mean[q] = sum[2 * q] / sum[2 * q + 1];
+  }
+  return mean;
+}
+
+// Volume flux (nondimensional, + along +z) through the disk of `radius_mm` around `centre_mm`
+// on the z-face plane nearest to its z. Collective.
+double disk_flux(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
+  const grid::Slabs& slabs = fluid.slabs();
+  const grid::Grid& g = slabs.grid();
+  const Vec3 c = centre_mm / kDmMm;
+  const double r = radius_mm / kDmMm;
+  const int k = static_cast<int>(std::lround(c.z() / g.dz()));
+  double q = 0;
+  if (k >= slabs.k_begin() && k < slabs.k_begin() + slabs.k_count()) {
+    const grid::ZFaceField& w = fluid.velocity().w;
+    for (int j = 0; j < g.ny(); ++j)
+      for (int i = 0; i < g.nx(); ++i) {
+        const double dx = g.x(grid::Location::z_face, i) - c.x(), dy = g.y(grid::Location::z_face, j) - c.y();
+        if (dx * dx + dy * dy <= r * r) q += w(i, j, k - slabs.k_begin()) * g.dx() * g.dy();
+      }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &q, 1, MPI_DOUBLE, MPI_SUM, slabs.comm());
+  return q;
+}
+
+bool rank_zero() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r == 0;
+}
+
+}  // namespace
+
+GridPoints fsei_grid_points(const config::Scenario& s) {
+  const std::string& r = s.fsei.resolution;
+  if (r == "coarse") return {65, 65, 73};
+  if (r == "basic") return {129, 129, 145};
+  if (r == "fine") return {193, 193, 257};
+  if (r == "very_fine") return {257, 257, 290};
+  if (r == "custom") return {s.fluid.nx, s.fluid.ny, s.fluid.nz};
+  throw InputError("fsei.resolution = \"" + r + "\" is not a preset; allowed: coarse, basic, fine, very_fine, custom");
+}
+
+const std::vector<std::string>& fsei_metric_names() {
+  static const std::vector<std::string> names{
+      "lv_pressure_start_mmhg", "lv_pressure_max_mmhg", "la_pressure_max_mmhg", "aortic_root_pressure_max_mmhg",
+      "lv_volume_start_ml", "lv_volume_min_ml", "lv_volume_end_ml", "la_volume_start_ml", "la_volume_end_ml",
+      "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
+      "lv_volume_balance_ml", "kinetic_energy_max_mj", "simulated_time_ms", "fluid_steps", "structure_substeps",
+      "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "ep_wall_s",
+      "fluid_wall_s", "structure_wall_s", "wall_time_s"};
+  return names;
+}
+
+RunResult run_fsei(const config::Scenario& s, RunControl& control) {
+  const bool with_ep = s.scene == "fsei";
+  const config::Fsei& fs = s.fsei;
+  const double period_ms = s.period_ms();
+  const double sync_ms = fs.sync_step_ms;
+  const double end_ms = fs.end_time_ms > 0 ? fs.end_time_ms : s.beats * period_ms;
+  if (with_ep) {
+    const double ratio = sync_ms / s.electro.time_step_ms;
+    if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
+      throw InputError("fsei.sync_step_ms = " + std::to_string(sync_ms) +
+                       " ms must be a whole multiple of electro.time_step_ms = " +
+                       std::to_string(s.electro.time_step_ms) + " ms");
+    if (s.electro.mesh != "left_heart")
+      throw InputError("scene fsei needs electro.mesh = \"left_heart\" (got \"" + s.electro.mesh + "\")");
+  }
+
+  // 1. the grid of the preset, and the heart in its box (build_left_heart checks the fit)
+  const GridPoints pts = fsei_grid_points(s);
+  const grid::Grid g({pts.nx - 1, pts.ny - 1, pts.nz - 1, s.fluid.box_x_mm / kDmMm, s.fluid.box_y_mm / kDmMm,
+                      s.fluid.box_z_mm / kDmMm});
+  const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
+  {
+    const double h_mm = std::max({g.dx(), g.dy(), g.dz()}) * kDmMm;
+    const double d_mm = 2 * heart.plane.aortic_radius_mm;
+    if (d_mm < kMinCellsAcrossAorticOrifice * h_mm) {
+      const double h_max = d_mm / kMinCellsAcrossAorticOrifice;
+      std::ostringstream m;
+      m << "fsei.resolution = \"" << fs.resolution << "\" (" << pts.nx << " x " << pts.ny << " x " << pts.nz
+        << " points) is too coarse for the valves: the aortic orifice (diameter " << d_mm << " mm) spans "
+        << d_mm / h_mm << " cells of " << h_mm << " mm; at least " << kMinCellsAcrossAorticOrifice
+        << " are needed (spacing <= " << h_max << " mm: at least "
+        << static_cast<int>(std::ceil(s.fluid.box_x_mm / h_max)) + 1 << " x "
+        << static_cast<int>(std::ceil(s.fluid.box_y_mm / h_max)) + 1 << " x "
+        << static_cast<int>(std::ceil(s.fluid.box_z_mm / h_max)) + 1 << " points)";
+      throw InputError(m.str());
+    }
+  }
+
+  // 2. the fluid: blood at rest, the Darcy afterload around the end of the descending aorta
+  const grid::Slabs slabs(g, MPI_COMM_WORLD);
+  fluid::FluidParameters fp;
+  fp.reynolds = units::kSeedVelocity_m_s * units::kSeedLength_m / s.fluid.kinematic_viscosity_m2_per_s;
+  fp.cfl = s.fluid.cfl;
+  fp.max_dt = std::min(s.fluid.max_dt_ms, sync_ms) / kTimeScaleMs;
+  fp.darcy_permeability = s.fluid.darcy_permeability;
+  {
+    const auto& o = heart.outflow;
+    // The cylinder's bounding box: its radius reaches r sqrt(1 - a_i^2) along axis i.
+    const Vec3 a = (o.end_mm - o.start_mm).normalized();
+    Vec3 pad;
+    for (int i = 0; i < 3; ++i) pad[i] = o.radius_mm * std::sqrt(std::max(0.0, 1 - a[i] * a[i]));
+    const Vec3 lo = o.start_mm.cwiseMin(o.end_mm) - pad;
+    const Vec3 hi = o.start_mm.cwiseMax(o.end_mm) + pad;
+    fp.darcy_regions.push_back({lo.x() / kDmMm, hi.x() / kDmMm, lo.y() / kDmMm, hi.y() / kDmMm, lo.z() / kDmMm,
+                                hi.z() / kDmMm});
+  }
+  fluid::FluidSolver fluid(slabs, fp);
+
+  // 3. the shells of the deformable bodies (the chamber walls as in scene electromechanics)
+  const config::Electromechanics& em = s.electromechanics;
+  const structure::ShellMaterials materials = chamber_wall_materials(s);
+  const structure::ShellOptions wall = chamber_wall_options(s, heart.plane.z_mm);
+  const structure::ShellOptions other = structure_options(s, heart.plane.z_mm);
+  const std::vector<std::string_view> deformable{geometry::kLvBody,           geometry::kLaBody,
+                                                 geometry::kMitralAnteriorBody, geometry::kMitralPosteriorBody,
+                                                 geometry::kAorticCuspBodies[0], geometry::kAorticCuspBodies[1],
+                                                 geometry::kAorticCuspBodies[2], geometry::kAortaBody};
+  std::vector<structure::ShellModel> models;
+  for (auto name : deformable) {
+    const bool chamber = name == geometry::kLvBody || name == geometry::kLaBody;
+    models.emplace_back(heart.body(name), materials, chamber ? wall : other);
+    const bool mitral = name == geometry::kMitralAnteriorBody || name == geometry::kMitralPosteriorBody;
+    // The seed's limiter (no chordae): towards the atrium, -z (ours: all the time; the seed's
+    // applies in systole only, and the leaflets open towards +z).
+    if (mitral && s.structure.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
+  }
+  structure::ContactOptions contact;
+  contact.enabled = s.structure.contact;
+  contact.rule = s.structure.contact_rule == "cell_average" ? structure::ContactRule::kCellAverage
+                                                            : structure::ContactRule::kPenalty;
+  contact.distance_mm = s.structure.contact_distance_mm;
+  contact.stiffness_kpa_per_mm = s.structure.contact_stiffness_kpa_per_mm;
+  contact.skin_mm = 0.5 * s.structure.contact_distance_mm;
+  structure::BodyGroup group(std::move(models), contact);
+  constexpr std::size_t kLv = 0, kLa = 1;
+
+  // 4. the markers: the rigid valvular plane, every deformable body (the LA wall and its vein
+  //    caps separately); one-sided loads from the blood inside the chambers and the aorta,
+  //    two-sided on the leaflets and the caps
+  ibm::Markers markers(g);
+  {
+    ibm::BodyOptions plane;
+    plane.mm_per_unit = kDmMm;
+    plane.rigid = true;
+    plane.sides = ibm::Sides::two;
+    markers.add_body(heart.body(geometry::kValvularPlaneBody), std::string(geometry::kValvularPlaneBody), plane);
+  }
+  std::vector<Link> links;
+  auto link = [&](const geometry::TriMesh& mesh, const std::string& name, std::size_t shell, bool two_sided, bool cap) {
+    ibm::BodyOptions o;
+    o.mm_per_unit = kDmMm;
+    o.rigid = false;
+    o.sides = two_sided ? ibm::Sides::two : ibm::Sides::one;
+    Link l;
+    l.marker_body = markers.add_body(mesh, name, o);
+    l.shell = shell;
+    l.map = geometry::tiling_map(mesh, markers.bodies()[static_cast<std::size_t>(l.marker_body)].tiling_level);
+    l.cap = cap;
+    links.push_back(std::move(l));
+  };
+  for (std::size_t b = 0; b < deformable.size(); ++b) {
+    const geometry::TriMesh& mesh = heart.body(deformable[b]);
+    const std::string name(deformable[b]);
+    if (b == kLa) {
+      auto is_cap = [&](std::size_t t) { return mesh.tissue[t] == geometry::Tissue::kVeinOstium; };
+      link(select_triangles(mesh, name, [&](std::size_t t) { return !is_cap(t); }), name, b, false, false);
+      const geometry::TriMesh caps = select_triangles(mesh, "pv_caps", is_cap);
+      if (!caps.tri.empty()) link(caps, "pv_caps", b, true, true);
+    } else {
+      link(mesh, name, b, mesh.kind == geometry::BodyKind::kLeaflet, false);
+    }
+  }
+  ibm::ForcingParameters forcing_parameters;
+  forcing_parameters.carry_over = fs.forcing_carry_over;
+  forcing_parameters.iterations = fs.forcing_iterations;
+  ibm::DirectForcing forcing(slabs, markers, forcing_parameters);
+  coupling::FluidModuleOptions fmo;
+  fmo.time_scale_ms = kTimeScaleMs;
+  coupling::FluidModule fluid_module(fluid, markers, forcing, fmo);
+
+  // 5. the active tension on the LV and LA walls: nodes within passive_annulus_mm of the anchor
+  //    ring (the fibrous annulus) and the vein caps carry none (as in scene electromechanics)
+  std::array<std::vector<std::int32_t>, 2> ep_node;  // per chamber: the EP node of each shell node, -1: none
+  std::unique_ptr<electro::TissueSolver> tissue;
+  std::unique_ptr<coupling::ElectroModule> ep_module;
+  std::unique_ptr<ShiftedClock> ep_clock;
+  {
+    const geometry::TriMesh& lv_mesh = heart.body(geometry::kLvBody);
+    const geometry::TriMesh& la_mesh = heart.body(geometry::kLaBody);
+    std::vector<std::array<std::int32_t, 2>> source;
+    if (with_ep) {
+      LeftHeartEp ep = left_heart_ep(s, lv_mesh, la_mesh);
+      source = ep.mesh.source_node;
+      tissue = std::make_unique<electro::TissueSolver>(std::move(ep.mesh), std::move(ep.options));
+    }
+    for (std::size_t c = 0; c < 2; ++c) {
+      const geometry::TriMesh& mesh = c == 0 ? lv_mesh : la_mesh;
+      auto& map = ep_node[c];
+      map.assign(mesh.node_count(), with_ep ? -1 : 0);
+      if (with_ep) {
+        for (std::size_t k = 0; k < source.size(); ++k)
+          if (source[k][0] == static_cast<int>(c)) map[static_cast<std::size_t>(source[k][1])] = static_cast<std::int32_t>(k);
+      } else {
+        // fsi: every wall node outside the vein caps
+        for (std::size_t i = 0; i < mesh.node_count(); ++i)
+          if (mesh.region[i] & geometry::kPvOstiumAny) map[i] = -1;
+      }
+      clear_passive_annulus(mesh, em.passive_annulus_mm, map);
+    }
+  }
+  // fsi: the 0-D activation shapes (LV onset at t = 0, LA at period - av_delay; ours)
+  const lumped::ChamberTiming lv_timing = lumped::ChamberTiming::lv(s), la_timing = lumped::ChamberTiming::la(s);
+  double scene_time_ms = 0;  // the prescribed tension's clock (the fluid's, at the sync points)
+  // The first beat starts at the LV stimulus with the LA at rest: its walls carry no tension
+  // before its first stimulus (ours: the stress-free LA is not the end of an atrial contraction;
+  // a sudden atrial tension at t = 0 is a jolt the blood cannot follow).
+  const double la_first_onset_ms = period_ms - s.av_delay_ms;
+  auto set_tension = [&](const std::vector<double>* ep_tension_kpa) {
+    for (std::size_t c = 0; c < 2; ++c) {
+      if (c == 1 && scene_time_ms < la_first_onset_ms - 1e-9) {
+        group.body(kLa).set_active_tension(std::vector<double>(group.body(kLa).node_count(), 0.0));
+        continue;
+      }
+      structure::ShellModel& m = group.body(c == 0 ? kLv : kLa);
+      std::vector<double> tau(m.node_count(), 0.0);
+      const double prescribed =
+          ep_tension_kpa ? 0.0
+                         : fs.prescribed_peak_tension_kpa *
+                               (c == 0 ? lv_timing : la_timing).activation(1e-3 * scene_time_ms);
+      for (std::size_t i = 0; i < tau.size(); ++i) {
+        const std::int32_t e = ep_node[c][i];
+        if (e < 0) continue;
+        tau[i] = ep_tension_kpa ? (*ep_tension_kpa)[static_cast<std::size_t>(e)] : prescribed;
+      }
+      m.set_active_tension(std::move(tau));
+    }
+  };
+  if (with_ep) {
+    // EP alone from the LA stimulus (t_EP = 0) to the LV stimulus (t_EP = av_delay): the scene
+    // starts at the beginning of systole (ours: the walls feel the tension from then on).
+    ep_module = std::make_unique<coupling::ElectroModule>(*tissue);
+    const double dt = s.electro.time_step_ms;
+    const long n = std::lround(s.av_delay_ms / dt);
+    for (long i = 0; i < n; ++i) ep_module->step(dt);
+    ep_clock = std::make_unique<ShiftedClock>(*ep_module, n * dt);
+    set_tension(&tissue->active_tension_kpa());
+  } else {
+    set_tension(nullptr);
+  }
+
+  // 6. the stages of one synchronisation interval (Fig. 6)
+  const double force_scale_mn = 1e-3 * s.fluid.density_kg_per_m3 * kUmMmPerMs * kUmMmPerMs * kDmMm * kDmMm;  // ρU²d²
+  coupling::BodyGroupModule structure_module(group);
+  coupling::Transfer tension{"active_tension",
+                             [&](std::vector<double>& d) {
+                               // [scene time, EP tension per EP node (fsei)]
+                               d.assign(1, ep_clock ? ep_clock->time_ms() : fluid_module.time_ms());
+                               if (with_ep) d.insert(d.end(), tissue->active_tension_kpa().begin(), tissue->active_tension_kpa().end());
+                             },
+                             [&](const std::vector<double>& d) {
+                               scene_time_ms = d[0];
+                               if (with_ep) {
+                                 const std::vector<double> tau(d.begin() + 1, d.end());
+                                 set_tension(&tau);
+                               } else {
+                                 set_tension(nullptr);
+                               }
+                             },
+                             false};
+  std::vector<std::size_t> shell_offset(group.body_count() + 1, 0);
+  for (std::size_t b = 0; b < group.body_count(); ++b) shell_offset[b + 1] = shell_offset[b] + group.body(b).node_count();
+  coupling::Transfer loads{"hydrodynamic loads",
+                           [&](std::vector<double>& d) {
+                             const ibm::MarkerLoads L = fluid_module.loads();
+                             d.assign(3 * shell_offset.back(), 0.0);
+                             for (const Link& l : links) {
+                               if (!markers.bodies()[static_cast<std::size_t>(l.marker_body)].active) continue;
+                               const std::vector<Vec3> f = l.map.spread(L.nodal_force.at(static_cast<std::size_t>(l.marker_body)),
+                                                                        group.body(l.shell).node_count());
+                               for (std::size_t n = 0; n < f.size(); ++n)
+                                 for (int c = 0; c < 3; ++c) d[3 * (shell_offset[l.shell] + n) + c] += force_scale_mn * f[n][c];
+                             }
+                           },
+                           [&](const std::vector<double>& d) {
+                             for (std::size_t b = 0; b < group.body_count(); ++b) {
+                               std::vector<Vec3> f(group.body(b).node_count());
+                               for (std::size_t n = 0; n < f.size(); ++n) {
+                                 const std::size_t i = 3 * (shell_offset[b] + n);
+                                 f[n] = Vec3(d[i], d[i + 1], d[i + 2]);
+                               }
+                               group.body(b).set_external_loads(std::move(f));
+                             }
+                           },
+                           true};
+  coupling::Transfer nodes{"structure nodes to the markers",
+                           [&](std::vector<double>& d) {
+                             d.clear();
+                             for (const Link& l : links) {
+                               const auto x = l.map.interpolate(group.body(l.shell).positions_mm());
+                               const auto v = l.map.interpolate(group.body(l.shell).velocities_mm_per_ms());
+                               for (std::size_t n = 0; n < x.size(); ++n)
+                                 for (int c = 0; c < 3; ++c) d.push_back(x[n][c] / kDmMm);
+                               for (std::size_t n = 0; n < v.size(); ++n)
+                                 for (int c = 0; c < 3; ++c) d.push_back(v[n][c] / kUmMmPerMs);
+                             }
+                           },
+                           [&](const std::vector<double>& d) {
+                             std::size_t at = 0;
+                             for (const Link& l : links) {
+                               const std::size_t n = l.map.size();
+                               std::vector<Vec3> x(n), v(n);
+                               for (std::size_t q = 0; q < n; ++q, at += 3) x[q] = Vec3(d[at], d[at + 1], d[at + 2]);
+                               for (std::size_t q = 0; q < n; ++q, at += 3) v[q] = Vec3(d[at], d[at + 1], d[at + 2]);
+                               fluid_module.set_body_nodes(l.marker_body, x, v);
+                             }
+                           },
+                           false};
+  std::vector<coupling::Stage> stages;
+  if (with_ep) {
+    stages.resize(3);
+    stages[0].module = ep_clock.get();
+    stages[0].after = {tension};
+    stages[1].module = &fluid_module;
+    stages[1].after = {loads};
+    stages[2].module = &structure_module;
+    stages[2].after = {nodes};
+  } else {
+    stages.resize(2);
+    stages[0].module = &fluid_module;
+    stages[0].after = {tension, loads};
+    stages[1].module = &structure_module;
+    stages[1].after = {nodes};
+  }
+  coupling::SchedulerOptions so;
+  so.sync_step_ms = sync_ms;
+  so.mode = fs.strong_coupling ? coupling::CouplingMode::strong : coupling::CouplingMode::loose;
+  so.strong_tolerance = s.coupling.strong_tolerance;
+  so.strong_max_iterations = s.coupling.strong_max_iterations;
+  coupling::Scheduler scheduler(std::move(stages), so);
+
+  // 7. probes: LV at 40 % of the long axis below the plane, the aortic root 8 mm above the
+  //    aortic orifice, the LA at its nodes' centroid, the outer reference in a box corner (ours)
+  std::vector<Probe> probes;
+  {
+    const Vec3 lv_c = heart.plane.centre_mm + 0.4 * s.geometry.lv_long_axis_mm * heart.lv_axis_direction;
+    const Vec3 ao_c = heart.plane.aortic_centre_mm - 8.0 * heart.lv_axis_direction;
+    Vec3 la_c = Vec3::Zero();
+    for (const Vec3& p : heart.body(geometry::kLaBody).position_mm) la_c += p;
+    la_c /= static_cast<double>(heart.body(geometry::kLaBody).node_count());
+    const double r = fs.probe_radius_mm + 1;
+    const Vec3 ref(r, r, 0.5 * s.fluid.box_z_mm);
+    probes = {{"lv", lv_c}, {"la", la_c}, {"aortic_root", ao_c}, {"outer", ref}};
+  }
+  const double mmhg_per_unit = s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s /
+                               units::kPaPerMmHg;
+  const double ml_s_per_unit = kUmMmPerMs * 1e3 * kDmMm * kDmMm * kMlPerMm3;  // U d² in ml/s
+  const double kinetic_mj_per_unit =
+      1e-3 * s.fluid.density_kg_per_m3 * kUmMmPerMs * kUmMmPerMs * g.lx() * g.ly() * g.lz() * kDmMm * kDmMm * kDmMm * 1e-6;
+
+  // 8. run, sampling at outputs.time_series_interval_ms
+  RunResult result;
+  std::vector<double> t_ms, p_lv, p_la, p_ao, v_lv, v_la, q_ao, q_mi, ke;
+  auto sample = [&] {
+    const auto p = probe_pressures(fluid, probes, fs.probe_radius_mm);
+    t_ms.push_back(fluid_module.time_ms());
+    p_lv.push_back((p[0] - p[3]) * mmhg_per_unit);
+    p_la.push_back((p[1] - p[3]) * mmhg_per_unit);
+    p_ao.push_back((p[2] - p[3]) * mmhg_per_unit);
+    v_lv.push_back(group.body(kLv).cavity_volume_mm3() * kMlPerMm3);
+    v_la.push_back(group.body(kLa).cavity_volume_mm3() * kMlPerMm3);
+    // ejection: the flow through the aortic orifice towards the aorta (-z); filling: through
+    // the mitral orifice into the LV (+z)
+    q_ao.push_back(-disk_flux(fluid, heart.plane.aortic_centre_mm, heart.plane.aortic_radius_mm) * ml_s_per_unit);
+    q_mi.push_back(disk_flux(fluid, heart.plane.mitral_centre_mm, heart.plane.mitral_radius_mm) * ml_s_per_unit);
+    ke.push_back(fluid.diagnostics().kinetic_energy * kinetic_mj_per_unit);
+    for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back()})
+      if (!std::isfinite(v))
+        throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(), "a chamber pressure, volume or flow is not finite");
+  };
+  auto caps_closed = [&](double t) {  // from the LA stimulus to the next LV stimulus
+    const double phase = std::fmod(t, period_ms);
+    return phase >= period_ms - s.av_delay_ms - 1e-9;
+  };
+  auto set_caps = [&](double t) {
+    for (const Link& l : links)
+      if (l.cap && markers.bodies()[static_cast<std::size_t>(l.marker_body)].active != caps_closed(t)) {
+        markers.set_active(l.marker_body, caps_closed(t));
+        forcing.markers_moved();
+      }
+  };
+  sample();
+  set_caps(0);
+  const double dt_sample = s.outputs.time_series_interval_ms;
+  double t = 0;
+  while (t < end_ms - 1e-9) {
+    // the next sample, clipped at a cap switch (the LA stimulus, the LV stimulus)
+    double next = std::min(end_ms, (std::floor(t / dt_sample + 1e-9) + 1) * dt_sample);
+    const double beat0 = std::floor(t / period_ms + 1e-9) * period_ms;
+    for (double sw : {beat0 + period_ms - s.av_delay_ms, beat0 + period_ms})
+      if (sw > t + 1e-9 && sw < next) next = sw;
+    scheduler.advance_to(next);
+    t = next;
+    set_caps(t);
+    sample();
+    ProgressReport rep;
+    rep.simulated_time_s = 1e-3 * t;
+    rep.beat = 1 + static_cast<int>(t / period_ms);
+    rep.beats_total = static_cast<int>(std::ceil(end_ms / period_ms - 1e-9));
+    rep.fraction = t / end_ms;
+    {
+      std::ostringstream m;  // the latest sample, so a run that stops later leaves its trend
+      m.precision(7);
+      m << s.scene << " t_ms " << t << " p_lv_mmhg " << p_lv.back() << " p_la_mmhg " << p_la.back() << " p_ao_mmhg "
+        << p_ao.back() << " v_lv_ml " << v_lv.back() << " v_la_ml " << v_la.back() << " q_ao_ml_s " << q_ao.back()
+        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back();
+      rep.message = m.str();
+    }
+    control.on_progress(rep);
+    if (control.cancel_requested()) throw Cancelled();
+  }
+
+  // 9. metrics and series
+  auto& M = result.metrics;
+  auto max_of = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
+  auto min_of = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  M["lv_pressure_start_mmhg"] = p_lv.front();
+  M["lv_pressure_max_mmhg"] = max_of(p_lv);
+  M["la_pressure_max_mmhg"] = max_of(p_la);
+  M["aortic_root_pressure_max_mmhg"] = max_of(p_ao);
+  M["lv_volume_start_ml"] = v_lv.front();
+  M["lv_volume_min_ml"] = min_of(v_lv);
+  M["lv_volume_end_ml"] = v_lv.back();
+  M["la_volume_start_ml"] = v_la.front();
+  M["la_volume_end_ml"] = v_la.back();
+  M["aortic_flow_max_ml_s"] = max_of(q_ao);
+  M["aortic_flow_min_ml_s"] = min_of(q_ao);
+  M["mitral_flow_max_ml_s"] = max_of(q_mi);
+  M["mitral_flow_min_ml_s"] = min_of(q_mi);
+  // What the LV lost beyond what left through its orifices (trapezoidal ∫ over the samples):
+  // the leak of the immersed boundary across the wall and the closed leaflets (ours).
+  double through_ml = 0;
+  for (std::size_t i = 1; i < t_ms.size(); ++i)
+    through_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * ((q_ao[i] - q_mi[i]) + (q_ao[i - 1] - q_mi[i - 1]));
+  M["lv_volume_balance_ml"] = (v_lv.back() - v_lv.front()) + through_ml;
+  M["kinetic_energy_max_mj"] = max_of(ke);
+  M["simulated_time_ms"] = t;
+  const auto& st = scheduler.stats();
+  const std::size_t fluid_stage = with_ep ? 1 : 0;
+  M["fluid_steps"] = static_cast<double>(st.modules[fluid_stage].steps);
+  M["structure_substeps"] = static_cast<double>(st.modules[fluid_stage + 1].steps);
+  M["ep_steps"] = with_ep ? static_cast<double>(st.modules[0].steps + std::lround(s.av_delay_ms / s.electro.time_step_ms)) : 0.0;
+  M["coupling_intervals"] = static_cast<double>(st.intervals);
+  double over = 0;
+  for (const auto& m : st.modules) over = std::max(over, m.max_step_over_limit);
+  M["max_step_over_limit"] = over;
+  M["grid_cells"] = static_cast<double>(g.cells());
+  M["markers"] = static_cast<double>(markers.size());
+  M["shell_nodes"] = static_cast<double>(shell_offset.back());
+  M["ep_wall_s"] = with_ep ? st.modules[0].wall_time_s : 0.0;
+  M["fluid_wall_s"] = st.modules[fluid_stage].wall_time_s;
+  M["structure_wall_s"] = st.modules[fluid_stage + 1].wall_time_s;
+  auto add = [&](const std::string& name, const std::string& unit, std::vector<double> v) {
+    result.series.push_back({name, unit, std::move(v)});
+  };
+  std::vector<double> t_s(t_ms.size());
+  for (std::size_t i = 0; i < t_ms.size(); ++i) t_s[i] = 1e-3 * t_ms[i];
+  add("time_s", "s", t_s);
+  add("lv_pressure_mmhg", "mmHg", p_lv);
+  add("la_pressure_mmhg", "mmHg", p_la);
+  add("aortic_root_pressure_mmhg", "mmHg", p_ao);
+  add("lv_volume_ml", "ml", v_lv);
+  add("la_volume_ml", "ml", v_la);
+  add("aortic_flow_ml_s", "ml/s", q_ao);
+  add("mitral_flow_ml_s", "ml/s", q_mi);
+  add("kinetic_energy_mj", "mJ", ke);
+  result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +
+                         std::to_string(pts.ny) + "x" + std::to_string(pts.nz) + " points), " +
+                         std::to_string(markers.size()) + " markers; chamber pressures relative to the outer-fluid probe");
+  {
+    std::ostringstream m;
+    m << "markers per body (tiling level m, markers):";
+    for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
+    result.notes.push_back(m.str());
+  }
+  if (!rank_zero()) result.notes.clear();
+  return result;
+}
+
+}  // namespace systole::scene

@@ -1,0 +1,46 @@
+#pragma once
+// Scenes "fsei" and "fsi" (issue #9, docs/fsei.md): the procedural left heart immersed in the
+// blood of the fluid box, every body forced by MLS direct forcing, the deformable ones moved by
+// their thin shells, the LV and LA contracting (fsei: tension from the EP of the electro scene;
+// fsi: a prescribed activation waveform instead of EP). One synchronisation interval of the
+// multirate scheduler reads like the seed's Fig. 6:
+//   1. tension: EP steps at its own step to t + Δt_sync (fsei) or the waveform is evaluated
+//      (fsi); the tension moves to the LV and LA shells;
+//   2. fluid: the fluid sub-cycles at its own stable step (CFL, viscous bound) with every body's
+//      markers at the held node positions and velocities (eq 1–10); the loads of eq 11–14 at
+//      the end go to the shells' nodes (the tiling maps' transposes);
+//   3. structure: all deformable bodies sub-cycle together at their stable step with contact
+//      between them (structure::BodyGroup), loads and tension held; their nodes go back to the
+//      markers.
+// Boundary conditions (MODEL.md §2): the valvular plane is rigid (MLS, ours: the seed uses
+// eq 4); the pulmonary-vein ostia are open to the outer fluid and closed by marker caps from the
+// LA stimulus to the LV stimulus (atrial contraction); the blood leaves the aorta through a
+// Darcy region at the end of the descending aorta (fluid.darcy_permeability). The run starts at
+// the LV stimulus (beginning of systole) with the valves closed and the fluid at rest; EP is
+// pre-run alone from the LA stimulus (ours).
+// Chamber pressures are spatial means over probe spheres inside the LV, LA and aortic root,
+// relative to a probe in the outer fluid (ours: the box's pressure level is arbitrary).
+#include <string>
+#include <vector>
+
+#include "solver/config/scenario.h"
+#include "solver/core/run_result.h"
+#include "solver/scene/scene.h"
+
+namespace systole::scene {
+
+// The grid points (nx, ny, nz) of a resolution preset; "custom" takes fluid.nx/ny/nz.
+// Throws InputError naming fsei.resolution for an unknown name.
+struct GridPoints {
+  int nx = 0, ny = 0, nz = 0;
+};
+GridPoints fsei_grid_points(const config::Scenario& scenario);
+
+// Runs scene "fsei" or "fsi" on MPI_COMM_WORLD (the caller has initialised MPI). Throws
+// InputError (geometry outside the box, a grid too coarse for the valves with the minimum,
+// bad settings), InstabilityError (module, place, time) or Cancelled.
+RunResult run_fsei(const config::Scenario& scenario, RunControl& control);
+
+const std::vector<std::string>& fsei_metric_names();
+
+}  // namespace systole::scene
