@@ -530,6 +530,11 @@ std::vector<Param> build_table() {
                           "Scenes 'fsei'/'fsi': direct-forcing passes per fluid step (multi-direct forcing; 3 "
                           "cut the leak through the heart's walls 7x against the seed's single pass: "
                           "docs/fsei.md)."));
+  t.push_back(SYSTOLE_CHOICE(fsei.marker_tiling, "longest_edge",
+                             (std::vector<std::string_view>{"longest_edge", "mean_edge"}),
+                             "Scenes 'fsei'/'fsi': tiling level of each deformable body: every tile edge <= 0.7 h "
+                             "(longest_edge), or the mean tile edge <= 0.7 h and the longest <= h (mean_edge, ours: "
+                             "fewer markers on meshes with a few long edges)."));
   return t;
 }
 

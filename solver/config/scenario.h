@@ -204,6 +204,7 @@ struct Fsei {
   bool strong_coupling;                 // false: loose (the seed's)
   bool forcing_carry_over;              // ibm::ForcingParameters::carry_over (ours)
   int forcing_iterations;               // ibm::ForcingParameters::iterations
+  std::string marker_tiling;            // "longest_edge" | "mean_edge" (ours)
 };
 
 struct Scenario {

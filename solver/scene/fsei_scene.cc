@@ -276,9 +276,28 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     markers.add_body(heart.body(geometry::kValvularPlaneBody), std::string(geometry::kValvularPlaneBody), plane);
   }
   std::vector<Link> links;
+  // The tiling level of a body (fsei.marker_tiling): "longest_edge" is ibm::Markers' rule (every
+  // tile edge <= 0.7 h); "mean_edge" (ours) tiles so that the mean tile edge is <= 0.7 h (the
+  // seed's "marker spacing ≈ 0.7 h") and the longest <= h (no marker coarser than the grid):
+  // a mesh with a few long edges is not over-refined everywhere.
+  const double h_mm = markers.h() * kDmMm;
+  auto tiling_level = [&](const geometry::TriMesh& mesh) {
+    if (fs.marker_tiling == "longest_edge") return 0;  // Markers' automatic choice
+    double sum = 0, longest = 0;
+    for (const auto& t : mesh.tri)
+      for (int k = 0; k < 3; ++k) {
+        const double l = (mesh.position_mm[t[k]] - mesh.position_mm[t[(k + 1) % 3]]).norm();
+        sum += l;
+        longest = std::max(longest, l);
+      }
+    const double mean = sum / (3.0 * static_cast<double>(mesh.tri.size()));
+    return std::max({1, static_cast<int>(std::ceil(longest / h_mm - 1e-12)),
+                     static_cast<int>(std::ceil(mean / (0.7 * h_mm) - 1e-12))});
+  };
   auto link = [&](const geometry::TriMesh& mesh, const std::string& name, std::size_t shell, bool two_sided, bool cap) {
     ibm::BodyOptions o;
     o.mm_per_unit = kDmMm;
+    o.tiling_level = tiling_level(mesh);
     o.rigid = false;
     o.sides = two_sided ? ibm::Sides::two : ibm::Sides::one;
     Link l;
