@@ -535,6 +535,9 @@ std::vector<Param> build_table() {
                              "Scenes 'fsei'/'fsi': tiling level of each deformable body: every tile edge <= 0.7 h "
                              "(longest_edge), or the mean tile edge <= 0.7 h and the longest <= h (mean_edge, ours: "
                              "fewer markers on meshes with a few long edges)."));
+  t.push_back(SYSTOLE_REAL(fsei.stencil_tolerance_cells, "", 0, 0, 0.5,
+                           "Scenes 'fsei'/'fsi': a body's MLS stencils are rebuilt only once one of its markers "
+                           "moved more than this x h since the last build (ours; 0: after any move)."));
   return t;
 }
 

@@ -205,6 +205,7 @@ struct Fsei {
   bool forcing_carry_over;              // ibm::ForcingParameters::carry_over (ours)
   int forcing_iterations;               // ibm::ForcingParameters::iterations
   std::string marker_tiling;            // "longest_edge" | "mean_edge" (ours)
+  double stencil_tolerance_cells;       // ibm::ForcingParameters::rebuild_tolerance_cells (ours)
 };
 
 struct Scenario {

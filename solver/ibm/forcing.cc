@@ -13,10 +13,16 @@ void validate(const ForcingParameters& p) {
     m << "ibm.forcing_iterations = " << p.iterations << " is out of range [1, 20]";
     throw InputError(m.str());
   }
+  if (!(p.rebuild_tolerance_cells >= 0 && p.rebuild_tolerance_cells <= 0.5)) {
+    std::ostringstream m;
+    m << "ibm rebuild tolerance = " << p.rebuild_tolerance_cells << " cells is out of range [0, 0.5]";
+    throw InputError(m.str());
+  }
 }
 
 DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, ForcingParameters parameters)
     : slabs_(slabs), markers_(markers), par_((validate(parameters), parameters)), transfer_(slabs, markers) {
+  transfer_.set_rebuild_tolerance(par_.rebuild_tolerance_cells * markers.h());
   if (par_.iterations > 1 || par_.carry_over) {
     work_u_ = std::make_unique<grid::XFaceField>(slabs);
     work_v_ = std::make_unique<grid::YFaceField>(slabs);

@@ -26,6 +26,9 @@ struct ForcingParameters {
   // a leak through the plate; carried over, the slip of a steady load goes to 0. Costs one
   // more interpolation and spreading per step (markers switched on start from F = 0).
   bool carry_over = false;
+  // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
+  // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
+  double rebuild_tolerance_cells = 0;
 };
 void validate(const ForcingParameters& p);
 

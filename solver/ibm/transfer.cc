@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "solver/core/errors.h"
+
 namespace systole::ibm {
 
 using grid::Location;
@@ -39,10 +41,15 @@ int Transfer::rebuild() {
   for (std::size_t body = 0; body < bodies.size(); ++body) {
     const Body& b = bodies[body];
     const auto first = static_cast<std::ptrdiff_t>(b.first_marker), last = first + static_cast<std::ptrdiff_t>(b.marker_count);
-    const bool unchanged = built_count_[body] == b.marker_count && built_first_[body] == b.first_marker &&
-                           built_active_[body] == static_cast<char>(b.active) &&
-                           std::equal(m.position.begin() + first, m.position.begin() + last,
-                                      built_position_.begin() + first);
+    bool unchanged = built_count_[body] == b.marker_count && built_first_[body] == b.first_marker &&
+                     built_active_[body] == static_cast<char>(b.active);
+    if (unchanged && rebuild_tolerance_ > 0) {
+      const double tol2 = rebuild_tolerance_ * rebuild_tolerance_;
+      for (auto q = first; q < last && unchanged; ++q)
+        unchanged = (m.position[static_cast<std::size_t>(q)] - built_position_[static_cast<std::size_t>(q)]).squaredNorm() <= tol2;
+    } else if (unchanged) {
+      unchanged = std::equal(m.position.begin() + first, m.position.begin() + last, built_position_.begin() + first);
+    }
     if (unchanged) continue;
     rebuild_body(body);
     std::copy(m.position.begin() + first, m.position.begin() + last, built_position_.begin() + first);
@@ -52,6 +59,11 @@ int Transfer::rebuild() {
     ++rebuilt;
   }
   return rebuilt;
+}
+
+void Transfer::set_rebuild_tolerance(double distance) {
+  if (!(distance >= 0)) throw InputError("ibm: rebuild tolerance " + std::to_string(distance) + " must be >= 0");
+  rebuild_tolerance_ = distance;
 }
 
 void Transfer::rebuild_body(std::size_t body) {

@@ -51,6 +51,11 @@ class Transfer {
   // markers); returns how many bodies were rebuilt. rebuild_all() ignores the check.
   int rebuild();
   void rebuild_all();
+  // A body counts as unmoved while no marker has moved more than `distance` (grid units) from
+  // where its stencil was built (ours; default 0: any change rebuilds). The stale stencils then
+  // serve both interpolation and spreading, so the spread force still sums to the Lagrangian
+  // total; the error is O(distance · ∇u). Must be the same on every rank.
+  void set_rebuild_tolerance(double distance);
 
   // u(X_b) for every marker (0 for inactive ones), the same on every rank. Collective.
   // Halos of u must be valid.
@@ -74,6 +79,7 @@ class Transfer {
   bool owns_plane(int k) const;
 
  private:
+  double rebuild_tolerance_ = 0;
   struct Entry {
     std::uint32_t marker;
     bool owner;       // this rank interpolates it

@@ -322,6 +322,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   ibm::ForcingParameters forcing_parameters;
   forcing_parameters.carry_over = fs.forcing_carry_over;
   forcing_parameters.iterations = fs.forcing_iterations;
+  forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
   ibm::DirectForcing forcing(slabs, markers, forcing_parameters);
   coupling::FluidModuleOptions fmo;
   fmo.time_scale_ms = kTimeScaleMs;

@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 #include <omp.h>
 
+#include "solver/core/errors.h"
 #include "solver/ibm/mls.h"
 #include "solver/ibm/shapes.h"
 #include "solver/ibm/transfer.h"
@@ -344,6 +345,34 @@ TEST(Transfer, RebuildSkipsUnmovedBodiesAndMatchesAFreshBuild) {
   EXPECT_EQ(t.rebuild(), 1);
   EXPECT_EQ(t.rebuild(), 0);
   EXPECT_EQ(t.interpolate({u, v, w}), Transfer(slabs, markers).interpolate({u, v, w}));
+}
+
+// With a rebuild tolerance a body keeps its stencils until a marker has moved more than the
+// tolerance since the last build; the stale stencils are the ones built at that time.
+TEST(Transfer, RebuildToleranceKeepsStencilsForSmallMoves) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_WORLD);
+  Markers markers(kGrid);
+  BodyOptions o;
+  o.mm_per_unit = 1.0;
+  const int b = markers.add_body(sphere_mesh(Vec3(0.9, 0.4, 1.1), 0.25, 2), "b", o);
+  Transfer t(slabs, markers);
+  t.set_rebuild_tolerance(0.1 * markers.h());
+  std::mt19937 gen(11);
+  grid::XFaceField u(slabs);
+  grid::YFaceField v(slabs);
+  grid::ZFaceField w(slabs);
+  fill_random(u, gen);
+  fill_random(v, gen);
+  fill_random(w, gen);
+  const auto before = t.interpolate({u, v, w});
+  markers.set_rigid_motion(b, Vec3(0.06 * markers.h(), 0, 0), Vec3::Zero(), Vec3(0.9, 0.4, 1.1));
+  markers.advance_rigid(1.0);  // 0.06 h: within the tolerance
+  EXPECT_EQ(t.rebuild(), 0);
+  EXPECT_EQ(t.interpolate({u, v, w}), before);  // the stencils built at the old positions
+  markers.advance_rigid(1.0);  // 0.12 h in all since the build: beyond it
+  EXPECT_EQ(t.rebuild(), 1);
+  EXPECT_EQ(t.interpolate({u, v, w}), Transfer(slabs, markers).interpolate({u, v, w}));
+  EXPECT_THROW(t.set_rebuild_tolerance(-1), InputError);
 }
 
 // Σ_k f_k ΔV_cell = Σ_b F_b ΔV_b to round-off (eq 7), summed over ranks.
