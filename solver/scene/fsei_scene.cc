@@ -504,8 +504,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   const double mmhg_per_unit = s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s /
                                units::kPaPerMmHg;
   const double ml_s_per_unit = kUmMmPerMs * 1e3 * kDmMm * kDmMm * kMlPerMm3;  // U d² in ml/s
-  const double kinetic_mj_per_unit =
-      1e-3 * s.fluid.density_kg_per_m3 * kUmMmPerMs * kUmMmPerMs * g.lx() * g.ly() * g.lz() * kDmMm * kDmMm * kDmMm * 1e-6;
+  // the box's kinetic energy: ρU² (J/m³) × the volume mean of ½|u|² × the box volume (mm³ → m³), in mJ
+  const double kinetic_mj_per_unit = 1e3 * s.fluid.density_kg_per_m3 * kUmMmPerMs * kUmMmPerMs *
+                                     (g.lx() * g.ly() * g.lz() * kDmMm * kDmMm * kDmMm * 1e-9);
 
   // 8. run, sampling at outputs.time_series_interval_ms
   RunResult result;
