@@ -22,6 +22,7 @@
 #include "solver/lumped/activation.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
+#include "solver/scene/h5_dataset.h"
 #include "solver/structure/contact.h"
 #include "solver/structure/shell.h"
 
@@ -147,12 +148,6 @@ double disk_flux(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double 
   }
   MPI_Allreduce(MPI_IN_PLACE, &q, 1, MPI_DOUBLE, MPI_SUM, slabs.comm());
   return q;
-}
-
-bool rank_zero() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r == 0;
 }
 
 }  // namespace
@@ -633,7 +628,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
     result.notes.push_back(m.str());
   }
-  if (!rank_zero()) result.notes.clear();
+  if (!is_rank_zero()) result.notes.clear();
   return result;
 }
 
