@@ -136,6 +136,10 @@ std::vector<Param> build_table() {
                            "Mitral leaflet thickness."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_leaflet_thickness_mm, "mm", 1.5, 0.2, 6,
                            "Aortic cusp thickness."));
+  t.push_back(SYSTOLE_REAL(geometry.valve_gap_mm, "mm", 0, 0, 3,
+                           "Gap between the free edges of the neighbouring closed mitral leaflets and aortic cusps "
+                           "(ours): 0 gives one orifice-ring edge (the free edges end on ring nodes, about "
+                           "target_edge_mm); else it must be shorter than a ring edge (docs/geometry.md)."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_root_diameter_mm, "mm", 40, 15, 70, "Aortic root diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_arch_diameter_mm, "mm", 30, 10, 60, "Aortic arch diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_descending_diameter_mm, "mm", 22, 8, 50,
@@ -540,6 +544,15 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi': a body's MLS stencils are rebuilt only once one of its markers "
                            "moved more than this x h since the last build (ours; 0: after any move; 0.1 saved 20 % "
                            "of a coarse step and moved the LV pressure at 16 ms by 0.45 %: docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.aortic_pressure_mmhg, "mmHg", 60, 0, 150,
+                           "Scenes 'fsei'/'fsi': the aorta's ground pressure at t = 0 (the seed's 60 mmHg "
+                           "pre-tension): an outer pressure on the aorta's wall outside the Darcy region "
+                           "(ours: a follower load, held) with the blood inside the aorta started at it, so "
+                           "the built aorta is in equilibrium (docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.aortic_pressure_ramp_ms, "ms", 0, 0, 200,
+                           "Scenes 'fsei'/'fsi': 0: the aorta's ground pressure is there at t = 0 (blood inside "
+                           "started at it); else the outer load on the aorta's wall rises linearly over this time "
+                           "from the blood at rest (ours: the closed cusps are loaded gradually; docs/fsei.md)."));
   return t;
 }
 

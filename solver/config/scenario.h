@@ -39,6 +39,7 @@ struct Geometry {
   double lv_fibre_angle_deg;
   double target_edge_mm;
   double marker_spacing_fraction;
+  double valve_gap_mm;  // between the free edges of neighbouring closed leaflets / cusps (ours)
 };
 
 struct Stimulus {
@@ -206,6 +207,8 @@ struct Fsei {
   int forcing_iterations;               // ibm::ForcingParameters::iterations
   std::string marker_tiling;            // "longest_edge" | "mean_edge" (ours)
   double stencil_tolerance_cells;       // ibm::ForcingParameters::rebuild_tolerance_cells (ours)
+  double aortic_pressure_mmhg;          // the aorta's ground pressure at t = 0 (an outer load on its wall)
+  double aortic_pressure_ramp_ms;       // 0: at once; else the outer load ramped over it, blood from rest (ours)
 };
 
 struct Scenario {

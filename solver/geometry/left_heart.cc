@@ -418,11 +418,18 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
 
   // ---- mitral leaflets (closed) -----------------------------------------------------------
   // Each leaflet is a height field over half of the orifice: the annulus arc (ring nodes) at
-  // the plane, the free edge a straight coaptation line parallel to y at x = +-r_m sin(pi/n_m),
-  // dipping to depth z_c (parabolic profile, shallow at the commissures) so that the leaflet's mid-section from annulus to
-  // free edge is a straight segment of length mitral_leaflet_length_mm. The two free edges are
-  // one ring edge apart (ours: the contact model closes that gap).
-  const double x_f = r_m * std::sin(M_PI / n_m), w_half = r_m * std::cos(M_PI / n_m);
+  // the plane, the free edge a straight coaptation line parallel to y at x = +-g/2 (g =
+  // valve_gap_mm; 0: one ring edge, the free edges ending on ring nodes), dipping to depth z_c (parabolic profile, shallow at the commissures) so that
+  // the leaflet's mid-section from annulus to free edge is a straight segment of length
+  // mitral_leaflet_length_mm. For g > 0 the free edges end on the ring's chords across the
+  // commissures (extra annulus nodes). Ours: the contact model does not close a gap of one ring
+  // edge (2 mm) by itself; a gap below the fluid spacing is an option (docs/fsei.md).
+  const double x_ring = r_m * std::sin(M_PI / n_m), w_half = r_m * std::cos(M_PI / n_m);
+  require(g.valve_gap_mm < 2 * x_ring,
+          "geometry.valve_gap_mm = " + num(g.valve_gap_mm) + " must be shorter than the mitral ring edge (" +
+              num(2 * x_ring) + " mm at target_edge_mm = " + num(g.target_edge_mm) + "); 0 gives one ring edge");
+  const bool ring_gap = g.valve_gap_mm == 0;  // the free edges end on the ring's nodes
+  const double x_f = ring_gap ? x_ring : 0.5 * g.valve_gap_mm;
   require(g.mitral_leaflet_length_mm > r_m - x_f + 0.5,
           "geometry.mitral_leaflet_length_mm = " + num(g.mitral_leaflet_length_mm) +
               " is too short to close the mitral orifice: it must exceed mitral_diameter_mm / 2 = " + num(r_m));
@@ -436,6 +443,9 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
     for (std::size_t i = 0; i < mitral_ring.node.size(); ++i)
       if (sgn * std::cos(mitral_ring.angle[i]) > 0)
         boundary.push_back({plane.position_mm[mitral_ring.node[i]], kAnchor | kMitralAnnulus});
+    // the free edge's ends, on the commissure chords (y = +-w_half) of the ring
+    if (!ring_gap)
+      for (double y : {-w_half, w_half}) boundary.push_back({Vec3(x_m + sgn * x_f, y, 0), kAnchor | kMitralAnnulus});
     auto z_free = [&](double s) { return z_c * std::max(0.0, 1 - s * s); };
     // Free-edge nodes equally spaced along the 3D edge (it is steep near the commissures).
     const auto fe = meridian_stations([&](double s) { return Vec2(s * w_half, z_free(s)); }, 1, -1, h_leaf, 2);
@@ -473,14 +483,23 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
 
   // ---- aortic cusps (closed) ----------------------------------------------------------------
   // Cusp k spans the sector around phi_k = 120 k degrees between commissures at phi_k +- 60
-  // (a commissure faces the LA, -x). Its free edges run parallel to the commissure radii, one
-  // ring edge from the neighbouring cusp's, and meet at a tip near the centre, raised to the
-  // coaptation height h_c = 0.5 r_a; the belly is a height field between the annulus and the
-  // free edges (ours).
+  // (a commissure faces the LA, -x). Its free edges run parallel to the commissure radii, g/2
+  // from them (g = valve_gap_mm, ending on the ring's chord across the commissure; 0: one ring
+  // edge, ending on the ring's nodes), and meet at
+  // a tip near the centre, raised to the coaptation height h_c = 0.5 r_a; the belly is a height
+  // field between the annulus and the free edges (ours). Under the aortic pressure this valve
+  // does not hold (docs/fsei.md, the closed valves alone): with the commissures in the flat
+  // annulus, nothing carries the free edges but their contact.
   const double h_c = kCuspHeightPerRadius * r_a;
   lay.cusp_coaptation_height_mm = h_c;
   {
-    const double d_tip = r_a * std::sin(M_PI / n_a) / std::sin(M_PI / 3);
+    const double half_ring_edge = r_a * std::sin(M_PI / n_a);
+    require(g.valve_gap_mm < 2 * half_ring_edge,
+            "geometry.valve_gap_mm = " + num(g.valve_gap_mm) + " must be shorter than the aortic ring edge (" +
+                num(2 * half_ring_edge) + " mm at target_edge_mm = " + num(g.target_edge_mm) + "); 0 gives one ring edge");
+    const bool ring_gap = g.valve_gap_mm == 0;  // the free edges end on the ring's nodes
+    const double half_gap = ring_gap ? half_ring_edge : 0.5 * g.valve_gap_mm;
+    const double d_tip = half_gap / std::sin(M_PI / 3);
     const double h_cusp = h_ring * 0.8;
     for (int k = 0; k < 3; ++k) {
       const double phi = 2 * M_PI * k / 3;
@@ -496,12 +515,20 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
         if (std::abs(rel + M_PI / 3 - M_PI / n_a) < 1e-9) e1 = p.head<2>();
         if (std::abs(rel - M_PI / 3 + M_PI / n_a) < 1e-9) e2 = p.head<2>();
       }
+      // The free edges' ends c1, c2: on the chord across each commissure, half_gap from it.
+      auto chord_end = [&](const Vec2& e, double commissure) {
+        const Vec2 mid = A.head<2>() + r_a * std::cos(M_PI / n_a) * Vec2(std::cos(commissure), std::sin(commissure));
+        return Vec2(mid + (e - mid) * (half_gap / half_ring_edge));
+      };
+      const Vec2 c1 = ring_gap ? e1 : chord_end(e1, phi - M_PI / 3), c2 = ring_gap ? e2 : chord_end(e2, phi + M_PI / 3);
+      if (!ring_gap)
+        for (const Vec2& c : {c1, c2}) boundary.push_back({Vec3(c.x(), c.y(), 0), kAnchor | kAorticAnnulus});
       const double rho_tip = d_tip / r_a;
       auto free_height = [&](const Vec2& p) {
         return h_c * std::max(0.0, 1 - (p - A.head<2>()).norm() / r_a) / (1 - rho_tip);
       };
       const Vec2 inside = A.head<2>() + 0.5 * r_a * dir;
-      for (const auto& [from, to] : {std::pair{e1, tip}, std::pair{tip, e2}}) {
+      for (const auto& [from, to] : {std::pair{c1, tip}, std::pair{tip, c2}}) {
         const double len = (to - from).norm();
         Vec2 out(-(to - from).y(), (to - from).x());
         out.normalize();
@@ -515,7 +542,7 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
         }
       }
       auto d_free = [&](const Vec2& p) {
-        return std::min(distance_to_segment(p, e1, tip), distance_to_segment(p, tip, e2));
+        return std::min(distance_to_segment(p, c1, tip), distance_to_segment(p, tip, c2));
       };
       auto side_ok = [&](const Vec2& p, const Vec2& from, const Vec2& to, double margin) {
         Vec2 nrm(-(to - from).y(), (to - from).x());
@@ -527,7 +554,7 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
       const double margin = 0.6 * h_cusp;
       for (const Vec2& p : detail::hex_lattice(A.head<2>() - Vec2(r_a, r_a), A.head<2>() + Vec2(r_a, r_a), h_cusp)) {
         if ((p - A.head<2>()).norm() > r_a - margin) continue;
-        if (!side_ok(p, e1, tip, margin) || !side_ok(p, tip, e2, margin)) continue;
+        if (!side_ok(p, c1, tip, margin) || !side_ok(p, tip, c2, margin)) continue;
         interior.push_back(p);
       }
       auto height = [&](const Vec2& p) {

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <unordered_map>
 
 #include "solver/core/errors.h"
 #include "solver/core/units.h"
@@ -19,6 +20,7 @@
 #include "solver/electro/tissue.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/geometry/tiling.h"
+#include "solver/geometry/tri_mesh.h"
 #include "solver/lumped/activation.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
@@ -150,6 +152,75 @@ double disk_flux(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double 
   return q;
 }
 
+// Whether a point lies inside the aorta (ours, for the initial pressure field): within reach_mm
+// of an aorta node and on the inner side of the nearest node's inward normal, but not on the
+// LV's side of the plane (z >= plane_z) within two orifice radii of the aortic axis (there the
+// nearest node is the root's ring, whose normal points at the LV's outflow tract). A bucket
+// grid of cell reach_mm.
+class AortaInterior {
+ public:
+  AortaInterior(const geometry::TriMesh& aorta, const geometry::ValvularPlane& plane, double reach_mm)
+      : x_(aorta.position_mm),
+        n_(geometry::node_normals(aorta)),
+        plane_z_mm_(plane.z_mm),
+        axis_mm_(plane.aortic_centre_mm),
+        outflow_tract_mm_(2 * plane.aortic_radius_mm),
+        cell_mm_(reach_mm) {
+    lo_ = x_.front();
+    for (const Vec3& p : x_) lo_ = lo_.cwiseMin(p);
+    for (std::size_t i = 0; i < x_.size(); ++i) buckets_[key(index(x_[i]))].push_back(static_cast<std::int32_t>(i));
+  }
+  bool inside(const Vec3& p_mm) const {
+    if (p_mm.z() >= plane_z_mm_ && (p_mm - axis_mm_).head<2>().norm() < outflow_tract_mm_) return false;
+    const std::array<long, 3> k = index(p_mm);
+    double best = cell_mm_ * cell_mm_;
+    std::int32_t nearest = -1;
+    for (int a = -1; a <= 1; ++a)
+      for (int b = -1; b <= 1; ++b)
+        for (int c = -1; c <= 1; ++c) {
+          const auto it = buckets_.find(key({k[0] + a, k[1] + b, k[2] + c}));
+          if (it == buckets_.end()) continue;
+          for (std::int32_t i : it->second) {
+            const double d2 = (x_[static_cast<std::size_t>(i)] - p_mm).squaredNorm();
+            if (d2 < best) best = d2, nearest = i;
+          }
+        }
+    if (nearest < 0) return false;
+    const auto i = static_cast<std::size_t>(nearest);
+    return (p_mm - x_[i]).dot(n_[i]) > 0;
+  }
+
+ private:
+  std::array<long, 3> index(const Vec3& p) const {
+    return {static_cast<long>(std::floor((p.x() - lo_.x()) / cell_mm_)),
+            static_cast<long>(std::floor((p.y() - lo_.y()) / cell_mm_)),
+            static_cast<long>(std::floor((p.z() - lo_.z()) / cell_mm_))};
+  }
+  static long key(const std::array<long, 3>& k) { return ((k[0] + 1024) * 2048 + (k[1] + 1024)) * 2048 + (k[2] + 1024); }
+  std::vector<Vec3> x_, n_;
+  double plane_z_mm_;
+  Vec3 axis_mm_;
+  double outflow_tract_mm_, cell_mm_;
+  Vec3 lo_;
+  std::unordered_map<long, std::vector<std::int32_t>> buckets_;
+};
+
+// The seed's aorta pre-tension (MODEL.md §1: "an external force providing a ground pressure of
+// 60 mmHg in the aortic root"), ours in detail: an outer pressure p on the aorta's wall, a
+// follower load -(-p) A n / 3 per node of each loaded triangle with its inward normal n (i.e.
+// pushing the wall into the lumen), evaluated at the given positions. The triangles of the Darcy
+// outflow (all three nodes tagged kOutflow) carry none: there the blood's pressure falls to the
+// outer fluid's, and an outer load would squeeze the tube shut. Adds to f (mN).
+void add_outer_pressure_loads(const geometry::TriMesh& aorta, const std::vector<Vec3>& x_mm, double pressure_kpa,
+                              std::vector<Vec3>& f_mn) {
+  const double k = pressure_kpa / 6;  // p (2 A n_in) / 6 = p A n_in / 3: into the lumen
+  for (const auto& t : aorta.tri) {
+    if ((aorta.region[t[0]] & aorta.region[t[1]] & aorta.region[t[2]] & geometry::kOutflow) != 0) continue;
+    const Vec3 fv = k * (x_mm[t[1]] - x_mm[t[0]]).cross(x_mm[t[2]] - x_mm[t[0]]);
+    for (int c = 0; c < 3; ++c) f_mn[t[c]] += fv;
+  }
+}
+
 }  // namespace
 
 GridPoints fsei_grid_points(const config::Scenario& s) {
@@ -258,6 +329,32 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   contact.skin_mm = 0.5 * s.structure.contact_distance_mm;
   structure::BodyGroup group(std::move(models), contact);
   constexpr std::size_t kLv = 0, kLa = 1;
+  const auto kAorta = static_cast<std::size_t>(
+      std::find(deformable.begin(), deformable.end(), geometry::kAortaBody) - deformable.begin());
+
+  // The aorta's ground pressure (the seed's pre-tension, MODEL.md §1): the blood inside the aorta
+  // starts at fsei.aortic_pressure_mmhg above the rest of the box, and an outer pressure as
+  // large holds its wall (add_outer_pressure_loads), so the built aorta is in equilibrium at
+  // t = 0 and the closed aortic valve carries the pressure from the first step. (Ours: the
+  // outer load stays on; the wall's elasticity adds to it as the aorta fills.) The fluid's
+  // pressure is incremental, so the offset persists: the outer fluid stays the reference.
+  const double aortic_outer_kpa = fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+  double aorta_initial_ml = 0;  // the volume started at the ground pressure (a note)
+  if (fs.aortic_pressure_mmhg > 0 && fs.aortic_pressure_ramp_ms == 0) {
+    const geometry::TriMesh& aorta = heart.body(geometry::kAortaBody);
+    const AortaInterior interior(aorta, heart.plane, 0.75 * s.geometry.aortic_root_diameter_mm);
+    const double p0 = fs.aortic_pressure_mmhg * units::kPaPerMmHg /
+                      (s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s);
+    long inside_cells = 0;
+    fluid.set_pressure([&](double x, double y, double z) {
+      if (!interior.inside(Vec3(x, y, z) * kDmMm)) return 0.0;
+      ++inside_cells;
+      return p0;
+    });
+    long all = 0;
+    MPI_Allreduce(&inside_cells, &all, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+    aorta_initial_ml = static_cast<double>(all) * g.dx() * g.dy() * g.dz() * kDmMm * kDmMm * kDmMm * kMlPerMm3;
+  }
 
   // 4. the markers: the rigid valvular plane, every deformable body (the LA wall and its vein
   //    caps separately); one-sided loads from the blood inside the chambers and the aorta,
@@ -432,6 +529,13 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                                for (std::size_t n = 0; n < f.size(); ++n) {
                                  const std::size_t i = 3 * (shell_offset[b] + n);
                                  f[n] = Vec3(d[i], d[i + 1], d[i + 2]);
+                               }
+                               if (b == kAorta && aortic_outer_kpa > 0) {
+                                 const double ramp = fs.aortic_pressure_ramp_ms > 0
+                                                         ? std::min(1.0, fluid_module.time_ms() / fs.aortic_pressure_ramp_ms)
+                                                         : 1.0;
+                                 add_outer_pressure_loads(heart.body(geometry::kAortaBody), group.body(b).positions_mm(),
+                                                          ramp * aortic_outer_kpa, f);
                                }
                                group.body(b).set_external_loads(std::move(f));
                              }
@@ -626,6 +730,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     std::ostringstream m;
     m << "markers per body (tiling level m, markers):";
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
+    result.notes.push_back(m.str());
+  }
+  if (fs.aortic_pressure_mmhg > 0) {
+    std::ostringstream m;
+    m << "aorta pre-tension: ground pressure " << fs.aortic_pressure_mmhg << " mmHg (outer load on the wall outside "
+      << "the Darcy region; the blood inside the aorta, " << aorta_initial_ml << " ml, started at it)";
     result.notes.push_back(m.str());
   }
   if (!is_rank_zero()) result.notes.clear();

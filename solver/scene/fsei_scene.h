@@ -17,7 +17,10 @@
 // LA stimulus to the LV stimulus (atrial contraction); the blood leaves the aorta through a
 // Darcy region at the end of the descending aorta (fluid.darcy_permeability). The run starts at
 // the LV stimulus (beginning of systole) with the valves closed and the fluid at rest; EP is
-// pre-run alone from the LA stimulus (ours).
+// pre-run alone from the LA stimulus (ours). The aorta is "pretensioned" to the ground pressure
+// fsei.aortic_pressure_mmhg: the blood in its lumen starts at that pressure and an outer
+// pressure as large acts on its wall outside the Darcy region (ours: it stays on; with
+// fsei.aortic_pressure_ramp_ms > 0 the outer load is ramped from blood at rest instead).
 // Chamber pressures are spatial means over probe spheres inside the LV, LA and aortic root,
 // relative to a probe in the outer fluid (ours: the box's pressure level is arbitrary).
 #include <string>

@@ -73,10 +73,11 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
 
 // The first 3 ms of systole at the coarse preset, prescribed tension (fsi): everything is
 // assembled and steps (fluid at its CFL step, structure sub-cycled, loads and nodes exchanged),
-// the LV pressure rises above the LA and the aortic root while the valves stay closed.
+// the LV pressure rises above the LA and the aortic root while the valves stay closed. Without
+// the aorta's ground pressure: the closed aortic valve does not carry it yet (docs/fsei.md).
 TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
-  const config::Scenario s =
-      scenario("fsi", {{"fsei", {{"end_time_ms", 3.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
+  const config::Scenario s = scenario(
+      "fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aortic_pressure_mmhg", 0.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
   Quiet control;
   const RunResult r = run_fsei(s, control);
   for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
@@ -100,6 +101,35 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   // The LV keeps its blood to 0.01 % over these 3 ms.
   EXPECT_LT(std::abs(r.metrics.at("lv_volume_end_ml") - r.metrics.at("lv_volume_start_ml")),
             1e-4 * r.metrics.at("lv_volume_start_ml"));
+}
+
+// The seed's aorta pre-tension (fsei.aortic_pressure_mmhg, 60 mmHg by default): the blood in the
+// aorta starts at the ground pressure and the outer load on the wall holds it, so after the
+// first coupling interval the aortic-root probe reads it (within 15 %) while the LV and the LA,
+// behind the closed valves, stay near the outer fluid's pressure; the note gives the aorta's
+// blood volume started at it (the default aorta's lumen is ≈ 110 ml by its radii and lengths:
+// root ≈ 16, arch ≈ 50, descending ≈ 43 ml).
+TEST(FseiScene, AortaStartsAtItsGroundPressure) {
+  const config::Scenario s =
+      scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}});
+  ASSERT_EQ(s.fsei.aortic_pressure_mmhg, 60.0);
+  Quiet control;
+  const RunResult r = run_fsei(s, control);
+  const double p_ao = r.metrics.at("aortic_root_pressure_max_mmhg");
+  EXPECT_NEAR(p_ao, 60.0, 9.0);
+  ASSERT_EQ(r.series.at(1).name, "lv_pressure_mmhg");
+  ASSERT_EQ(r.series.at(2).name, "la_pressure_mmhg");
+  EXPECT_LT(std::abs(r.series.at(1).values.back()), 0.05 * p_ao);
+  EXPECT_LT(std::abs(r.series.at(2).values.back()), 0.05 * p_ao);
+  bool noted = false;
+  for (const auto& n : r.notes)
+    if (n.find("ground pressure 60 mmHg") != std::string::npos) {
+      noted = true;
+      const double ml = std::stod(n.substr(n.find("aorta, ") + 7));
+      EXPECT_GT(ml, 80.0) << n;
+      EXPECT_LT(ml, 140.0) << n;
+    }
+  EXPECT_TRUE(noted);
 }
 
 }  // namespace

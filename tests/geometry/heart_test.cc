@@ -207,6 +207,51 @@ TEST(Heart, HalvingTheLvAxesIsRejectedWithTheDefaultOrifices) {
   }
 }
 
+// The closed valves' free edges are geometry.valve_gap_mm apart (0: one ring edge): measured between the mitral
+// leaflets' free-edge nodes (both edges share their stations along y), and between the free-edge
+// nodes of neighbouring cusps (parallel lines: no node pair is closer than the gap). A gap as
+// long as the ring edge is refused naming the field.
+double free_edge_distance_mm(const TriMesh& a, const TriMesh& b) {
+  double d = 1e300;
+  for (std::size_t i = 0; i < a.node_count(); ++i) {
+    if (!(a.region[i] & kFreeEdge)) continue;
+    for (std::size_t j = 0; j < b.node_count(); ++j)
+      if (b.region[j] & kFreeEdge) d = std::min(d, (a.position_mm[i] - b.position_mm[j]).norm());
+  }
+  return d;
+}
+TEST(Heart, ValveGapIsTheParameter) {
+  {
+    // the default 0: one orifice-ring edge (the free edges end on ring nodes)
+    const LeftHeart heart = build(defaults());
+    const double gap = heart.layout.leaflet_gap_mm;
+    EXPECT_GT(gap, 0.9 * heart.layout.ring_edge_mm);
+    EXPECT_LT(gap, 1.1 * heart.layout.ring_edge_mm);
+    EXPECT_NEAR(free_edge_distance_mm(heart.body(kMitralAnteriorBody), heart.body(kMitralPosteriorBody)), gap, 0.01);
+  }
+  for (double gap : {0.6, 1.2}) {
+    auto s = defaults();
+    s.geometry.valve_gap_mm = gap;
+    const LeftHeart heart = build(s);
+    EXPECT_NEAR(heart.layout.leaflet_gap_mm, gap, 1e-12);
+    EXPECT_NEAR(free_edge_distance_mm(heart.body(kMitralAnteriorBody), heart.body(kMitralPosteriorBody)), gap, 0.01);
+    for (int k = 0; k < 3; ++k) {
+      const double d = free_edge_distance_mm(heart.body(kAorticCuspBodies[k]), heart.body(kAorticCuspBodies[(k + 1) % 3]));
+      EXPECT_GE(d, gap - 0.01) << k;
+      EXPECT_LT(d, gap + 0.5 * heart.layout.ring_edge_mm) << k;
+    }
+  }
+  auto s = defaults();
+  s.geometry.valve_gap_mm = 2.5;
+  try {
+    build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("geometry.valve_gap_mm = 2.5"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ring edge"), std::string::npos) << e.what();
+  }
+}
+
 // Helix angle measured on the mesh in an independent frame: e_c = the horizontal direction
 // counter-clockwise about +z, e_l = the projection of -z (towards the base), both in the
 // triangle plane; angle = atan2(f.e_l, f.e_c).
