@@ -2,8 +2,10 @@
 // path=value overrides, prints every sample on stderr as it comes (so a run that stops with a
 // diagnosis leaves its trend) and the metrics on stdout. The scenes are not yet offered by the
 // service (docs/fsei.md, status); this is how they are studied.
-//   fsei_case fsi|fsei [fsei.end_time_ms=16] [fsei.resolution=coarse] [outputs.time_series_interval_ms=2] ...
+//   fsei_case fsi|fsei [out=DIR] [fsei.end_time_ms=16] [fsei.resolution=coarse] [outputs.time_series_interval_ms=2] ...
+// out=DIR: the output directory (field frames with fsei.field_interval_ms > 0).
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <mpi.h>
@@ -15,7 +17,8 @@
 namespace {
 class Printer final : public systole::scene::RunControl {
  public:
-  explicit Printer(int rank) : rank_(rank) {}
+  Printer(int rank, std::filesystem::path out) : rank_(rank), out_(std::move(out)) {}
+  std::filesystem::path output_directory() override { return out_; }
   void on_progress(const systole::ProgressReport& r) override {
     if (rank_ != 0) return;
     std::fprintf(stderr, "%s\n", r.message.c_str());
@@ -25,6 +28,7 @@ class Printer final : public systole::scene::RunControl {
 
  private:
   int rank_;
+  std::filesystem::path out_;
 };
 }  // namespace
 
@@ -37,11 +41,16 @@ int main(int argc, char** argv) {
     if (argc < 2 || (std::string(argv[1]) != "fsi" && std::string(argv[1]) != "fsei"))
       throw systole::InputError("usage: fsei_case fsi|fsei [path=value ...]");
     nlohmann::json doc = nlohmann::json::object();
-    for (int a = 2; a < argc; ++a) systole::config::apply_override(doc, argv[a]);
+    std::filesystem::path out;
+    for (int a = 2; a < argc; ++a) {
+      const std::string arg = argv[a];
+      if (arg.rfind("out=", 0) == 0) out = arg.substr(4);
+      else systole::config::apply_override(doc, arg);
+    }
     doc["scene"] = "electromechanics";  // parse_scenario does not offer fsei/fsi yet
     systole::config::Scenario s = systole::config::parse_scenario(doc);
     s.scene = argv[1];
-    Printer control(rank);
+    Printer control(rank, out);
     const systole::RunResult r = systole::scene::run_fsei(s, control);
     if (rank == 0) {
       for (const auto& [k, v] : r.metrics) std::printf("%s = %.6g\n", k.c_str(), v);

@@ -553,6 +553,12 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi': 0: the aorta's ground pressure is there at t = 0 (blood inside "
                            "started at it); else the outer load on the aorta's wall rises linearly over this time "
                            "from the blood at rest (ours: the closed cusps are loaded gradually; docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.field_interval_ms, "ms", 0, 0, 1e5,
+                           "Scenes 'fsei'/'fsi': 0: no fields; else a frame every this from t = 0, and one of the "
+                           "bodies when a run stops unstable: the fluid's velocity (m/s), pressure (mmHg) and "
+                           "vorticity (1/s) in fsei_fluid_<k>.h5, every body's nodes (positions, velocities, the "
+                           "largest edge strain, the active tension) in fsei_bodies.h5, and fsei_fields.xmf that "
+                           "shows them together in ParaView (mm), in the output directory."));
   return t;
 }
 

@@ -692,9 +692,9 @@ void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelect
   for (int k = 0; k < p_.k_count(); ++k)
     for (int j = 0; j < g.ny(); ++j)
       for (int i = 0; i < g.nx(); ++i) {
-        uc(i, j, k) = 0.5 * (V.u(i, j, k) + V.u(i + 1, j, k));
-        vc(i, j, k) = 0.5 * (V.v(i, j, k) + V.v(i, j + 1, k));
-        wc(i, j, k) = 0.5 * (V.w(i, j, k) + V.w(i, j, k + 1));
+        uc(i, j, k) = 0.5 * (V.u(i, j, k) + V.u(i + 1, j, k)) * which.velocity_scale;
+        vc(i, j, k) = 0.5 * (V.v(i, j, k) + V.v(i, j + 1, k)) * which.velocity_scale;
+        wc(i, j, k) = 0.5 * (V.w(i, j, k) + V.w(i, j, k + 1)) * which.velocity_scale;
         // Central differences of the cell-centred interpolants (second order, one cell wide).
         auto ucx = [&](int a, int b, int c) { return 0.5 * (V.u(a, b, c) + V.u(a + 1, b, c)); };
         auto vcx = [&](int a, int b, int c) { return 0.5 * (V.v(a, b, c) + V.v(a, b + 1, c)); };
@@ -705,9 +705,9 @@ void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelect
         const double dwdx = 0.5 * (wcx(i + 1, j, k) - wcx(i - 1, j, k)) * idx;
         const double dvdx = 0.5 * (vcx(i + 1, j, k) - vcx(i - 1, j, k)) * idx;
         const double dudy = 0.5 * (ucx(i, j + 1, k) - ucx(i, j - 1, k)) * idy;
-        ox(i, j, k) = dwdy - dvdz;
-        oy(i, j, k) = dudz - dwdx;
-        oz(i, j, k) = dvdx - dudy;
+        ox(i, j, k) = (dwdy - dvdz) * which.vorticity_scale;
+        oy(i, j, k) = (dudz - dwdx) * which.vorticity_scale;
+        oz(i, j, k) = (dvdx - dudy) * which.vorticity_scale;
       }
   {
     grid::FieldFile f(h5_file, slabs_, grid::FieldFile::Mode::create);
@@ -716,7 +716,17 @@ void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelect
       f.write("velocity_y", vc);
       f.write("velocity_z", wc);
     }
-    if (which.pressure) f.write("pressure", p_);
+    if (which.pressure) {
+      if (which.pressure_scale == 1) {
+        f.write("pressure", p_);
+      } else {
+        grid::CellField ps(slabs_);
+        for (int k = 0; k < p_.k_count(); ++k)
+          for (int j = 0; j < g.ny(); ++j)
+            for (int i = 0; i < g.nx(); ++i) ps(i, j, k) = p_(i, j, k) * which.pressure_scale;
+        f.write("pressure", ps);
+      }
+    }
     if (which.vorticity) {
       f.write("vorticity_x", ox);
       f.write("vorticity_y", oy);
@@ -724,7 +734,7 @@ void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelect
     }
     f.write_attribute("time", time_);
   }
-  if (slabs_.rank() == 0) {
+  if (slabs_.rank() == 0 && which.write_xdmf) {
     auto xdmf = h5_file;
     xdmf.replace_extension(".xmf");
     std::vector<std::string> scalars;

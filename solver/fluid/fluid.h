@@ -138,8 +138,13 @@ class FluidSolver {
   double stable_step() const { return choose_time_step(1e300); }
   // Velocity, pressure and vorticity at cell centres (+ XDMF sidecar for ParaView), the ones
   // `which` selects. Collective.
+  // Which fields, in which units: the values written are the nondimensional ones times the
+  // scales (1: nondimensional), and write_xdmf adds <file>.xmf (rank 0) for the grid in
+  // nondimensional lengths. The dataset names do not change with the scales.
   struct FieldSelection {
     bool velocity = true, pressure = true, vorticity = true;
+    double velocity_scale = 1, pressure_scale = 1, vorticity_scale = 1;
+    bool write_xdmf = true;
   };
   void write_fields(const std::filesystem::path& h5_file, FieldSelection which) const;
   void write_fields(const std::filesystem::path& h5_file) const { write_fields(h5_file, FieldSelection{}); }

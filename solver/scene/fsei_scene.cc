@@ -24,6 +24,7 @@
 #include "solver/lumped/activation.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
+#include "solver/scene/fsei_fields.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/structure/contact.h"
 #include "solver/structure/shell.h"
@@ -239,7 +240,8 @@ const std::vector<std::string>& fsei_metric_names() {
       "lv_volume_start_ml", "lv_volume_min_ml", "lv_volume_end_ml", "la_volume_start_ml", "la_volume_end_ml",
       "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
       "lv_volume_balance_ml", "kinetic_energy_max_mj", "simulated_time_ms", "fluid_steps", "structure_substeps",
-      "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "ep_wall_s",
+      "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
+      "ep_wall_s",
       "fluid_wall_s", "structure_wall_s", "wall_time_s"};
   return names;
 }
@@ -640,17 +642,41 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   };
   sample();
   set_caps(0);
+  // Field frames (fsei.field_interval_ms) from t = 0, into the caller's output directory.
+  std::unique_ptr<FseiFieldWriter> fields;
+  long field_frames_done = 0;
+  if (fs.field_interval_ms > 0 && !control.output_directory().empty()) {
+    fluid::FluidSolver::FieldSelection units;
+    units.velocity_scale = kUmMmPerMs;                 // U (mm/ms = m/s)
+    units.pressure_scale = mmhg_per_unit;              // ρU² in mmHg
+    units.vorticity_scale = 1e3 * kUmMmPerMs / kDmMm;  // U/d in 1/s
+    std::vector<std::string> names(deformable.begin(), deformable.end());
+    fields = std::make_unique<FseiFieldWriter>(control.output_directory(), g, kDmMm,
+                                               heart.body(geometry::kValvularPlaneBody), group, names, units);
+    fields->frame(0.0, fluid, group);
+    field_frames_done = 1;
+  }
   const double dt_sample = s.outputs.time_series_interval_ms;
   double t = 0;
+  try {
   while (t < end_ms - 1e-9) {
-    // the next sample, clipped at a cap switch (the LA stimulus, the LV stimulus)
+    // the next sample, clipped at a cap switch (the LA stimulus, the LV stimulus) and at a field
+    // frame (which is not a sample)
     double next = std::min(end_ms, (std::floor(t / dt_sample + 1e-9) + 1) * dt_sample);
     const double beat0 = std::floor(t / period_ms + 1e-9) * period_ms;
     for (double sw : {beat0 + period_ms - s.av_delay_ms, beat0 + period_ms})
       if (sw > t + 1e-9 && sw < next) next = sw;
+    const double next_field = fields ? static_cast<double>(field_frames_done) * fs.field_interval_ms : 1e300;
+    const bool field_only = next_field < next - 1e-9;
+    if (field_only) next = next_field;
     scheduler.advance_to(next);
     t = next;
     set_caps(t);
+    if (fields && std::abs(t - next_field) < 1e-9) {
+      fields->frame(t, fluid, group);
+      ++field_frames_done;
+    }
+    if (field_only) continue;
     sample();
     ProgressReport rep;
     rep.simulated_time_s = 1e-3 * t;
@@ -667,6 +693,17 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     }
     control.on_progress(rep);
     if (control.cancel_requested()) throw Cancelled();
+  }
+  } catch (const InstabilityError&) {
+    // the bodies as they were when the run stopped: the diagnosis in pictures (rank 0 alone,
+    // no communication; the stop itself is reported by rethrowing)
+    if (fields) {
+      try {
+        fields->bodies_frame(group.body(0).time_ms(), group, "unstable");
+      } catch (const std::exception&) {
+      }
+    }
+    throw;
   }
 
   // 9. metrics and series
@@ -706,6 +743,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["grid_cells"] = static_cast<double>(g.cells());
   M["markers"] = static_cast<double>(markers.size());
   M["shell_nodes"] = static_cast<double>(shell_offset.back());
+  M["field_frames"] = fields ? fields->frames() : 0;
   M["ep_wall_s"] = with_ep ? st.modules[0].wall_time_s : 0.0;
   M["fluid_wall_s"] = st.modules[fluid_stage].wall_time_s;
   M["structure_wall_s"] = st.modules[fluid_stage + 1].wall_time_s;
@@ -731,6 +769,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     m << "markers per body (tiling level m, markers):";
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
     result.notes.push_back(m.str());
+  }
+  if (fields) {
+    result.notes.push_back(std::to_string(fields->frames()) + " field frames every " + std::to_string(fs.field_interval_ms) +
+                           " ms: fsei_fields.xmf (fluid fsei_fluid_<k>.h5, bodies fsei_bodies.h5)");
+  } else if (fs.field_interval_ms > 0) {
+    result.notes.push_back("fields were requested (fsei.field_interval_ms) but the caller gave no output directory: none written");
   }
   if (fs.aortic_pressure_mmhg > 0) {
     std::ostringstream m;

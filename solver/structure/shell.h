@@ -197,6 +197,7 @@ class ShellModel {
   const std::vector<EdgeSpring>& springs() const { return springs_; }
   const std::vector<BendingHinge>& hinges() const { return hinges_; }
   const std::vector<std::uint8_t>& fixed() const { return fixed_; }
+  const std::vector<double>& active_tension_kpa() const { return active_tension_kpa_; }  // per node, as set
   const geometry::TriMesh& stress_free_mesh() const { return mesh_; }
   const SpringLaw& law() const { return *law_; }
   // Replaces positions and velocities (tests, restarts); recomputes the forces.

@@ -4,12 +4,19 @@
 // scenes are not offered by the service yet: docs/fsei.md has the status and what stops longer
 // runs.
 #include <gtest/gtest.h>
+#include <hdf5.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
+#include "solver/geometry/left_heart.h"
 #include "solver/scene/fsei_scene.h"
 
 namespace systole::scene {
@@ -21,6 +28,44 @@ class Quiet final : public RunControl {
   bool cancel_requested() override { return false; }
   int reports = 0;
 };
+
+class ToDirectory final : public RunControl {
+ public:
+  explicit ToDirectory(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  void on_progress(const ProgressReport&) override {}
+  bool cancel_requested() override { return false; }
+  std::filesystem::path output_directory() override { return dir_; }
+
+ private:
+  std::filesystem::path dir_;
+};
+
+std::filesystem::path fresh_directory(const std::string& name) {
+  auto d = std::filesystem::temp_directory_path() / ("systole_fsei_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  return d;
+}
+
+// A whole dataset of an HDF5 file as doubles (its dimensions in dims).
+std::vector<double> read_doubles(const std::filesystem::path& file, const std::string& set, std::vector<hsize_t>& dims) {
+  const hid_t f = H5Fopen(file.string().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return {};
+  const hid_t d = H5Dopen2(f, set.c_str(), H5P_DEFAULT);
+  std::vector<double> out;
+  if (d >= 0) {
+    const hid_t sp = H5Dget_space(d);
+    dims.assign(static_cast<std::size_t>(H5Sget_simple_extent_ndims(sp)), 0);
+    H5Sget_simple_extent_dims(sp, dims.data(), nullptr);
+    hsize_t n = 1;
+    for (hsize_t x : dims) n *= x;
+    out.resize(n);
+    H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
+    H5Sclose(sp);
+    H5Dclose(d);
+  }
+  H5Fclose(f);
+  return out;
+}
 
 config::Scenario scenario(const std::string& scene, nlohmann::json doc) {
   doc["scene"] = "electromechanics";  // parse_scenario does not offer fsi/fsei yet
@@ -130,6 +175,90 @@ TEST(FseiScene, AortaStartsAtItsGroundPressure) {
       EXPECT_LT(ml, 140.0) << n;
     }
   EXPECT_TRUE(noted);
+}
+
+// Field frames (fsei.field_interval_ms = 0.1 ms, samples every 0.2 ms): frames at 0, 0.1 and
+// 0.2 ms that are not samples; the bodies start at their built shape and move; the fluid's
+// pressure is in mmHg (the aorta's 60 mmHg ground pressure at the aortic-root probe, relative
+// to the box corner), the xmf names every frame's files.
+TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
+  const auto dir = fresh_directory("fields");
+  const config::Scenario s = scenario(
+      "fsi", {{"fsei", {{"end_time_ms", 0.2}, {"field_interval_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.2}}}});
+  ToDirectory control(dir);
+  const RunResult r = run_fsei(s, control);
+  EXPECT_EQ(r.metrics.at("field_frames"), 3.0);
+  EXPECT_EQ(r.series.at(0).values.size(), 2u);  // samples at 0 and 0.2 ms only
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::filesystem::exists(dir / ("fsei_fluid_" + std::to_string(k) + ".h5"))) << k;
+  const auto bodies = dir / "fsei_bodies.h5";
+  std::vector<hsize_t> dims;
+  for (int k = 0; k < 3; ++k) {
+    const auto t = read_doubles(bodies, "frames/" + std::to_string(k) + "/time_ms", dims);
+    ASSERT_EQ(t.size(), 1u);
+    EXPECT_NEAR(t[0], 0.1 * k, 1e-9);
+  }
+  const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
+  const auto& lv = heart.body(geometry::kLvBody).position_mm;
+  for (int k : {0, 2}) {
+    const auto x = read_doubles(bodies, "frames/" + std::to_string(k) + "/lv_positions_mm", dims);
+    ASSERT_EQ(dims.size(), 2u);
+    ASSERT_EQ(dims[0], lv.size());
+    ASSERT_EQ(dims[1], 3u);
+    double moved = 0;
+    for (std::size_t i = 0; i < lv.size(); ++i)
+      for (int c = 0; c < 3; ++c) moved = std::max(moved, std::abs(x[3 * i + c] - lv[i][c]));
+    if (k == 0) EXPECT_EQ(moved, 0.0);
+    else EXPECT_GT(moved, 1e-6);
+  }
+  EXPECT_EQ(read_doubles(bodies, "frames/2/la_active_tension_kpa", dims).size(), heart.body(geometry::kLaBody).node_count());
+  EXPECT_EQ(read_doubles(bodies, "frames/2/mitral_anterior_edge_strain", dims).size(),
+            heart.body(geometry::kMitralAnteriorBody).node_count());
+  // The pressure in mmHg: the cell at the aortic-root probe (8 mm above the aortic orifice)
+  // minus the cell at the outer probe's corner, at frame 1.
+  const auto p = read_doubles(dir / "fsei_fluid_1.h5", "pressure", dims);
+  ASSERT_EQ(dims.size(), 3u);  // [nz][ny][nx]
+  const double hx = s.fluid.box_x_mm / static_cast<double>(dims[2]), hy = s.fluid.box_y_mm / static_cast<double>(dims[1]),
+               hz = s.fluid.box_z_mm / static_cast<double>(dims[0]);
+  auto at = [&](const geometry::Vec3& q) {
+    const auto i = static_cast<hsize_t>(q.x() / hx), j = static_cast<hsize_t>(q.y() / hy), k = static_cast<hsize_t>(q.z() / hz);
+    return p[(k * dims[1] + j) * dims[2] + i];
+  };
+  const geometry::Vec3 root = heart.plane.aortic_centre_mm - 8.0 * heart.lv_axis_direction;
+  const geometry::Vec3 corner(5, 5, 0.5 * s.fluid.box_z_mm);
+  EXPECT_NEAR(at(root) - at(corner), 60.0, 12.0);
+  std::ifstream xmf(dir / "fsei_fields.xmf");
+  std::stringstream text;
+  text << xmf.rdbuf();
+  const std::string x = text.str();
+  std::size_t times = 0;
+  for (std::size_t q = x.find("<Time Value"); q != std::string::npos; q = x.find("<Time Value", q + 1)) ++times;
+  EXPECT_EQ(times, 3u);
+  EXPECT_NE(x.find("fsei_fluid_2.h5:/pressure"), std::string::npos);
+  EXPECT_NE(x.find("fsei_bodies.h5:/frames/2/aorta_positions_mm"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// A run that stops unstable leaves a last frame of the bodies, labelled, after its frames so far
+// (a strain limit of 0.1 % stops the shells in the first interval).
+TEST(FseiScene, AnUnstableStopLeavesTheBodiesFrame) {
+  const auto dir = fresh_directory("unstable");
+  const config::Scenario s = scenario(
+      "fsi", {{"fsei", {{"end_time_ms", 0.5}, {"field_interval_ms", 0.1}}}, {"structure", {{"strain_limit", 0.001}}}});
+  ToDirectory control(dir);
+  try {
+    run_fsei(s, control);
+    FAIL() << "expected InstabilityError";
+  } catch (const InstabilityError& e) {
+    EXPECT_NE(std::string(e.what()).find("structure"), std::string::npos) << e.what();
+  }
+  std::ifstream xmf(dir / "fsei_fields.xmf");
+  std::stringstream text;
+  text << xmf.rdbuf();
+  EXPECT_NE(text.str().find("frame1 unstable"), std::string::npos);
+  std::vector<hsize_t> dims;
+  EXPECT_EQ(read_doubles(dir / "fsei_bodies.h5", "frames/1/lv_positions_mm", dims).size(),
+            3 * geometry::build_left_heart(s.geometry, s.fluid).body(geometry::kLvBody).node_count());
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1,0 +1,202 @@
+#include "solver/scene/fsei_fields.h"
+
+#include <hdf5.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+#include "solver/geometry/left_heart.h"
+#include "solver/scene/h5_dataset.h"
+
+namespace systole::scene {
+namespace {
+
+constexpr const char* kBodiesFile = "fsei_bodies.h5";
+constexpr const char* kXmfFile = "fsei_fields.xmf";
+
+std::string fluid_file(int k) { return "fsei_fluid_" + std::to_string(k) + ".h5"; }
+
+bool has_tension(const std::string& name) { return name == geometry::kLvBody || name == geometry::kLaBody; }
+
+std::vector<double> flat(const std::vector<geometry::Vec3>& v) {
+  std::vector<double> out;
+  out.reserve(3 * v.size());
+  for (const auto& p : v) out.insert(out.end(), {p.x(), p.y(), p.z()});
+  return out;
+}
+
+}  // namespace
+
+FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
+                                 const geometry::TriMesh& plane, const structure::BodyGroup& group,
+                                 std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units)
+    : dir_(std::move(dir)),
+      nx_(grid.nx()),
+      ny_(grid.ny()),
+      nz_(grid.nz()),
+      dx_mm_(grid.dx() * mm_per_unit),
+      dy_mm_(grid.dy() * mm_per_unit),
+      dz_mm_(grid.dz() * mm_per_unit),
+      names_(std::move(names)),
+      plane_nodes_(plane.node_count()),
+      plane_triangles_(plane.triangle_count()),
+      units_(fluid_units),
+      rank0_(is_rank_zero()) {
+  if (names_.size() != group.body_count())
+    throw std::invalid_argument("FseiFieldWriter: " + std::to_string(names_.size()) + " names for " +
+                                std::to_string(group.body_count()) + " bodies");
+  units_.write_xdmf = false;
+  for (std::size_t b = 0; b < group.body_count(); ++b) {
+    triangles_.push_back(group.body(b).stress_free_mesh().triangle_count());
+    nodes_.push_back(group.body(b).node_count());
+  }
+  if (!rank0_) return;
+  std::filesystem::create_directories(dir_);
+  const std::string path = (dir_ / kBodiesFile).string();
+  const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (file < 0) throw std::runtime_error("fsei fields: cannot create " + path);
+  H5Gclose(H5Gcreate2(file, "mesh", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  H5Gclose(H5Gcreate2(file, "frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  auto triangles = [&](const geometry::TriMesh& m, const std::string& name) {
+    std::vector<std::int32_t> tri;
+    for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
+    write_h5_dataset(file, "mesh/" + name + "_triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3,
+                     "fsei fields");
+  };
+  triangles(plane, std::string(geometry::kValvularPlaneBody));
+  const std::vector<double> xp = flat(plane.position_mm);
+  write_h5_dataset(file, "mesh/" + std::string(geometry::kValvularPlaneBody) + "_positions_mm", H5T_NATIVE_DOUBLE,
+                   xp.data(), plane.node_count(), 3, "fsei fields");
+  for (std::size_t b = 0; b < group.body_count(); ++b) triangles(group.body(b).stress_free_mesh(), names_[b]);
+  H5Fclose(file);
+}
+
+void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyGroup& group) const {
+  const std::string path = (dir_ / kBodiesFile).string();
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file < 0) throw std::runtime_error("fsei fields: cannot open " + path);
+  const std::string g = "frames/" + std::to_string(k);
+  H5Gclose(H5Gcreate2(file, g.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  write_h5_dataset(file, g + "/time_ms", H5T_NATIVE_DOUBLE, &time_ms, 1, 1, "fsei fields");
+  for (std::size_t b = 0; b < group.body_count(); ++b) {
+    const structure::ShellModel& m = group.body(b);
+    const std::string n = g + "/" + names_[b];
+    const std::vector<double> x = flat(m.positions_mm()), v = flat(m.velocities_mm_per_ms());  // mm/ms = m/s
+    write_h5_dataset(file, n + "_positions_mm", H5T_NATIVE_DOUBLE, x.data(), m.node_count(), 3, "fsei fields");
+    write_h5_dataset(file, n + "_velocity_m_s", H5T_NATIVE_DOUBLE, v.data(), m.node_count(), 3, "fsei fields");
+    std::vector<double> worst(m.node_count(), 0.0);
+    const std::vector<double> eps = m.edge_strains();
+    const auto& springs = m.springs();
+    for (std::size_t e = 0; e < springs.size(); ++e)
+      for (std::int32_t i : {springs[e].i, springs[e].j}) {
+        double& w = worst[static_cast<std::size_t>(i)];
+        if (!(std::abs(eps[e]) <= std::abs(w))) w = eps[e];  // a NaN strain is kept: it is the diagnosis
+      }
+    write_h5_dataset(file, n + "_edge_strain", H5T_NATIVE_DOUBLE, worst.data(), m.node_count(), 1, "fsei fields");
+    if (has_tension(names_[b]))
+      write_h5_dataset(file, n + "_active_tension_kpa", H5T_NATIVE_DOUBLE, m.active_tension_kpa().data(),
+                       m.node_count(), 1, "fsei fields");
+  }
+  H5Fclose(file);
+}
+
+void FseiFieldWriter::frame(double time_ms, const fluid::FluidSolver& fluid, const structure::BodyGroup& group) {
+  const int k = frames();
+  fluid.write_fields(dir_ / fluid_file(k), units_);
+  frames_.push_back({time_ms, true, ""});
+  if (!rank0_) return;
+  write_bodies(k, time_ms, group);
+  write_xmf();
+}
+
+void FseiFieldWriter::bodies_frame(double time_ms, const structure::BodyGroup& group, const std::string& label) {
+  const int k = frames();
+  frames_.push_back({time_ms, false, label});
+  if (!rank0_) return;
+  write_bodies(k, time_ms, group);
+  write_xmf();
+}
+
+void FseiFieldWriter::write_xmf() const {
+  const std::filesystem::path xmf = dir_ / kXmfFile;
+  const std::filesystem::path tmp = dir_ / (std::string(kXmfFile) + ".tmp");
+  {
+    std::ofstream x(tmp);
+    if (!x) throw std::runtime_error("fsei fields: cannot write " + tmp.string());
+    x.precision(10);
+    const std::string dims = std::to_string(nz_) + " " + std::to_string(ny_) + " " + std::to_string(nx_);
+    auto cells = [&](const std::string& file, const std::string& set) {
+      return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + file +
+             ":/" + set + "</DataItem>";
+    };
+    auto nodes = [&](std::size_t n, int comps, const std::string& set) {
+      std::ostringstream d;
+      d << "<DataItem Dimensions=\"" << n;
+      if (comps > 1) d << ' ' << comps;
+      d << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << kBodiesFile << ":/" << set << "</DataItem>";
+      return d.str();
+    };
+    auto topology = [&](std::size_t nt, const std::string& name) {
+      return "<Topology TopologyType=\"Triangle\" NumberOfElements=\"" + std::to_string(nt) +
+             "\"><DataItem Dimensions=\"" + std::to_string(nt) + " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" +
+             std::string(kBodiesFile) + ":/mesh/" + name + "_triangles</DataItem></Topology>\n";
+    };
+    x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+      << "  <Grid Name=\"fsei\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (std::size_t k = 0; k < frames_.size(); ++k) {
+      const Frame& f = frames_[k];
+      std::string frame_name = "frame" + std::to_string(k);
+      if (!f.label.empty()) frame_name.append(" ").append(f.label);
+      x << "   <Grid Name=\"" << frame_name << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\""
+        << f.time_ms << "\"/>\n";
+      if (f.fluid) {
+        const std::string file = fluid_file(static_cast<int>(k));
+        x << "    <Grid Name=\"fluid\" GridType=\"Uniform\">\n"
+          << "     <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << dims << "\"/>\n"
+          << "     <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
+          << "      <DataItem Dimensions=\"3\" NumberType=\"Float\" Format=\"XML\">" << dz_mm_ / 2 << " " << dy_mm_ / 2
+          << " " << dx_mm_ / 2 << "</DataItem>\n"
+          << "      <DataItem Dimensions=\"3\" NumberType=\"Float\" Format=\"XML\">" << dz_mm_ << " " << dy_mm_ << " "
+          << dx_mm_ << "</DataItem>\n     </Geometry>\n";
+        if (units_.pressure)
+          x << "     <Attribute Name=\"pressure_mmhg\" AttributeType=\"Scalar\" Center=\"Node\">" << cells(file, "pressure")
+            << "</Attribute>\n";
+        for (const auto& [on, name, base] : {std::tuple{units_.velocity, "velocity_m_s", "velocity"},
+                                             std::tuple{units_.vorticity, "vorticity_per_s", "vorticity"}}) {
+          if (!on) continue;
+          const std::string b = base;
+          x << "     <Attribute Name=\"" << name << "\" AttributeType=\"Vector\" Center=\"Node\">\n"
+            << "      <DataItem ItemType=\"Function\" Function=\"JOIN($0, $1, $2)\" Dimensions=\"" << dims << " 3\">\n"
+            << "       " << cells(file, b + "_x") << "\n       " << cells(file, b + "_y") << "\n       "
+            << cells(file, b + "_z") << "\n      </DataItem>\n     </Attribute>\n";
+        }
+        x << "    </Grid>\n";
+      }
+      const std::string plane(geometry::kValvularPlaneBody);
+      x << "    <Grid Name=\"" << plane << "\" GridType=\"Uniform\">\n     " << topology(plane_triangles_, plane)
+        << "     <Geometry GeometryType=\"XYZ\">" << nodes(plane_nodes_, 3, "mesh/" + plane + "_positions_mm")
+        << "</Geometry>\n    </Grid>\n";
+      for (std::size_t b = 0; b < names_.size(); ++b) {
+        const std::string p = "frames/" + std::to_string(k) + "/" + names_[b];
+        x << "    <Grid Name=\"" << names_[b] << "\" GridType=\"Uniform\">\n     " << topology(triangles_[b], names_[b])
+          << "     <Geometry GeometryType=\"XYZ\">" << nodes(nodes_[b], 3, p + "_positions_mm") << "</Geometry>\n"
+          << "     <Attribute Name=\"velocity_m_s\" AttributeType=\"Vector\" Center=\"Node\">"
+          << nodes(nodes_[b], 3, p + "_velocity_m_s") << "</Attribute>\n"
+          << "     <Attribute Name=\"edge_strain\" AttributeType=\"Scalar\" Center=\"Node\">"
+          << nodes(nodes_[b], 1, p + "_edge_strain") << "</Attribute>\n";
+        if (has_tension(names_[b]))
+          x << "     <Attribute Name=\"active_tension_kpa\" AttributeType=\"Scalar\" Center=\"Node\">"
+            << nodes(nodes_[b], 1, p + "_active_tension_kpa") << "</Attribute>\n";
+        x << "    </Grid>\n";
+      }
+      x << "   </Grid>\n";
+    }
+    x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  }
+  std::filesystem::rename(tmp, xmf);
+}
+
+}  // namespace systole::scene

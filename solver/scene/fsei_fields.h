@@ -1,0 +1,64 @@
+#pragma once
+// Field frames of scenes "fsei"/"fsi" (fsei.field_interval_ms, docs/fsei.md): what ParaView needs
+// to show the blood and the tissue together, in millimetres.
+//   fsei_fluid_<k>.h5   the fluid at frame k, cell-centred: velocity_x/y/z (m/s), pressure
+//                       (mmHg, relative to the box's arbitrary level), vorticity_x/y/z (1/s);
+//                       written collectively by every rank (FluidSolver::write_fields).
+//   fsei_bodies.h5      /mesh/<body>_triangles (stress-free connectivity), the rigid plane's
+//                       /mesh/valvular_plane_positions_mm, and per frame /frames/<k>/:
+//                       time_ms, <body>_positions_mm, <body>_velocity_m_s, <body>_edge_strain
+//                       (per node, the signed strain (l - l0)/l of its most strained edge) and,
+//                       for the LV and LA, <body>_active_tension_kpa. Rank 0 writes.
+//   fsei_fields.xmf     a temporal collection: per frame the fluid grid (when it has one), the
+//                       plane and every body. Rewritten after every frame, so a run that stops
+//                       leaves a readable file with the frames so far.
+// Contract: construct on every rank with the same arguments; frame() is collective when it
+// writes the fluid; bodies_frame() is rank 0's alone (no communication: usable after a
+// rank-local failure). Throws std::runtime_error naming the file on I/O failure.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "solver/fluid/fluid.h"
+#include "solver/geometry/tri_mesh.h"
+#include "solver/structure/contact.h"
+
+namespace systole::scene {
+
+class FseiFieldWriter {
+ public:
+  // names[b]: the name of group body b; mm_per_unit: the fluid grid's length unit in mm;
+  // velocity/pressure/vorticity scales: nondimensional → m/s, mmHg, 1/s.
+  FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
+                  const geometry::TriMesh& plane, const structure::BodyGroup& group,
+                  std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units);
+
+  // A frame of the fluid and the bodies at time_ms (collective).
+  void frame(double time_ms, const fluid::FluidSolver& fluid, const structure::BodyGroup& group);
+  // A frame of the bodies only (rank 0; e.g. when a run stopped unstable), labelled in the xmf.
+  void bodies_frame(double time_ms, const structure::BodyGroup& group, const std::string& label);
+
+  int frames() const { return static_cast<int>(frames_.size()); }
+  const std::filesystem::path& directory() const { return dir_; }
+
+ private:
+  struct Frame {
+    double time_ms;
+    bool fluid;
+    std::string label;
+  };
+  void write_bodies(int k, double time_ms, const structure::BodyGroup& group) const;
+  void write_xmf() const;
+
+  std::filesystem::path dir_;
+  int nx_, ny_, nz_;
+  double dx_mm_, dy_mm_, dz_mm_;
+  std::vector<std::string> names_;
+  std::vector<std::size_t> triangles_, nodes_;
+  std::size_t plane_nodes_, plane_triangles_;
+  fluid::FluidSolver::FieldSelection units_;
+  bool rank0_;
+  std::vector<Frame> frames_;
+};
+
+}  // namespace systole::scene
