@@ -711,6 +711,7 @@ void FluidSolver::write_fields(const std::filesystem::path& h5_file, FieldSelect
       }
   {
     grid::FieldFile f(h5_file, slabs_, grid::FieldFile::Mode::create);
+    f.set_compression(which.gzip_level);
     if (which.velocity) {
       f.write("velocity_x", uc);
       f.write("velocity_y", vc);

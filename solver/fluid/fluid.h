@@ -145,6 +145,7 @@ class FluidSolver {
     bool velocity = true, pressure = true, vorticity = true;
     double velocity_scale = 1, pressure_scale = 1, vorticity_scale = 1;
     bool write_xdmf = true;
+    int gzip_level = 0;  // > 0: shuffle + gzip at this level (grid::FieldFile::set_compression)
   };
   void write_fields(const std::filesystem::path& h5_file, FieldSelection which) const;
   void write_fields(const std::filesystem::path& h5_file) const { write_fields(h5_file, FieldSelection{}); }

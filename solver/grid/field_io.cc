@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
 
@@ -55,8 +56,16 @@ void FieldFile::write_raw(const std::string& name, const double* data, Location 
   hsize_t dims[3] = {static_cast<hsize_t>(g.nz()), static_cast<hsize_t>(g.ny()),
                      static_cast<hsize_t>(g.nx())};
   hid_t file_space = H5Screate_simple(3, dims, nullptr);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  if (gzip_level_ > 0) {
+    const hsize_t chunk[3] = {std::min<hsize_t>(dims[0], 8), dims[1], dims[2]};
+    H5Pset_chunk(dcpl, 3, chunk);
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, static_cast<unsigned>(gzip_level_));
+  }
   hid_t set = H5Dcreate2(static_cast<hid_t>(file_), name.c_str(), H5T_NATIVE_DOUBLE, file_space,
-                         H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+                         H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  H5Pclose(dcpl);
   if (set < 0) fail(path_, "create dataset " + name);
   select_slab(file_space, slabs_);
   hid_t mem = memory_space(slabs_);
@@ -103,6 +112,13 @@ void FieldFile::read_raw(const std::string& name, double* data, Location) const 
   H5Sclose(file_space);
   H5Dclose(set);
   if (status < 0) fail(path_, "read dataset " + name);
+}
+
+void FieldFile::set_compression(int gzip_level) {
+  if (gzip_level < 0 || gzip_level > 9)
+    throw std::invalid_argument("FieldFile::set_compression: gzip level " + std::to_string(gzip_level) +
+                                " outside [0, 9]");
+  gzip_level_ = gzip_level;
 }
 
 void FieldFile::write_attribute(const std::string& name, double value) {

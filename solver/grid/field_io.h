@@ -31,6 +31,10 @@ class FieldFile {
   void read(const std::string& name, Field<L>& f) const {
     read_raw(name, f.data(), L);
   }
+  // Datasets written after this are chunked (up to 8 z-planes per chunk) and compressed with
+  // shuffle + gzip at this level (1-9; 0: contiguous, uncompressed, the default). Collective
+  // writes of filtered datasets need parallel HDF5 >= 1.10.2 (Debian 12 has 1.10.8).
+  void set_compression(int gzip_level);
   void write_attribute(const std::string& name, double value);
   double read_attribute(const std::string& name) const;
 
@@ -40,6 +44,7 @@ class FieldFile {
   std::filesystem::path path_;
   const Slabs& slabs_;
   long long file_ = -1;  // hid_t
+  int gzip_level_ = 0;
 };
 
 // XDMF 2 for the cell-centred datasets `scalars` (and the 3-component `vectors`, each given as

@@ -650,6 +650,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     units.velocity_scale = kUmMmPerMs;                 // U (mm/ms = m/s)
     units.pressure_scale = mmhg_per_unit;              // ρU² in mmHg
     units.vorticity_scale = 1e3 * kUmMmPerMs / kDmMm;  // U/d in 1/s
+    units.gzip_level = 4;                              // shuffle + gzip (ours: level 4)
     std::vector<std::string> names(deformable.begin(), deformable.end());
     fields = std::make_unique<FseiFieldWriter>(control.output_directory(), g, kDmMm,
                                                heart.body(geometry::kValvularPlaneBody), group, names, units);

@@ -180,7 +180,7 @@ TEST(FseiScene, AortaStartsAtItsGroundPressure) {
 // Field frames (fsei.field_interval_ms = 0.1 ms, samples every 0.2 ms): frames at 0, 0.1 and
 // 0.2 ms that are not samples; the bodies start at their built shape and move; the fluid's
 // pressure is in mmHg (the aorta's 60 mmHg ground pressure at the aortic-root probe, relative
-// to the box corner), the xmf names every frame's files.
+// to the box corner) and compressed, the xmf names every frame's files.
 TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
   const auto dir = fresh_directory("fields");
   const config::Scenario s = scenario(
@@ -226,6 +226,9 @@ TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
   const geometry::Vec3 root = heart.plane.aortic_centre_mm - 8.0 * heart.lv_axis_direction;
   const geometry::Vec3 corner(5, 5, 0.5 * s.fluid.box_z_mm);
   EXPECT_NEAR(at(root) - at(corner), 60.0, 12.0);
+  // Shuffle + gzip: a frame in motion is smaller than its 7 raw double fields.
+  const double raw = 7.0 * 8.0 * static_cast<double>(dims[0] * dims[1] * dims[2]);
+  EXPECT_LT(static_cast<double>(std::filesystem::file_size(dir / "fsei_fluid_1.h5")), 0.9 * raw);
   std::ifstream xmf(dir / "fsei_fields.xmf");
   std::stringstream text;
   text << xmf.rdbuf();
