@@ -509,14 +509,16 @@ void FluidSolver::check_stability(double dt) {
   const double cfl = dt * (global[0] / g.dx() + global[1] / g.dy() + global[2] / g.dz());
   if (dt > 0 && cfl > par_.abort_cfl) {
     std::ostringstream place, what;
-    place << "step " << steps_ << " (max |u|,|v|,|w| = " << global[0] << ", " << global[1] << ", " << global[2] << ")";
+    place << "step " << steps_ << ", fastest cell " << fastest_cell() << " (max |u|,|v|,|w| = " << global[0] << ", "
+          << global[1] << ", " << global[2] << ")";
     what << "realised CFL " << cfl << " > abort_cfl " << par_.abort_cfl << " with dt = " << dt;
     throw InstabilityError("fluid", place.str(), time_s, what.str());
   }
   if (dt > 0 && kinetic_energy_ > 0 && ke_new > par_.abort_energy_floor &&
       ke_new > par_.abort_energy_growth * kinetic_energy_) {
     std::ostringstream place, what;
-    place << "step " << steps_ << " (max |u|,|v|,|w| = " << global[0] << ", " << global[1] << ", " << global[2] << ")";
+    place << "step " << steps_ << ", fastest cell " << fastest_cell() << " (max |u|,|v|,|w| = " << global[0] << ", "
+          << global[1] << ", " << global[2] << ")";
     what << "kinetic energy grew by a factor " << ke_new / kinetic_energy_ << " > abort_energy_growth "
          << par_.abort_energy_growth << " in one step of dt = " << dt;
     throw InstabilityError("fluid", place.str(), time_s, what.str());
@@ -525,6 +527,33 @@ void FluidSolver::check_stability(double dt) {
   max_v_ = global[1];
   max_w_ = global[2];
   kinetic_energy_ = ke_new;
+}
+
+std::string FluidSolver::fastest_cell() const {
+  const grid::Grid& g = slabs_.grid();
+  struct {
+    double value;
+    int rank;
+  } local{-1, slabs_.rank()}, global{};
+  int at[3] = {0, 0, 0};
+  for (int k = 0; k < p_.k_count(); ++k)
+    for (int j = 0; j < g.ny(); ++j)
+      for (int i = 0; i < g.nx(); ++i) {
+        const double c = std::abs(vel_.u(i, j, k)) / g.dx() + std::abs(vel_.v(i, j, k)) / g.dy() +
+                         std::abs(vel_.w(i, j, k)) / g.dz();
+        if (c > local.value || !std::isfinite(c)) {
+          local.value = std::isfinite(c) ? c : std::numeric_limits<double>::max();
+          at[0] = i, at[1] = j, at[2] = slabs_.k_begin() + k;
+        }
+      }
+  MPI_Allreduce(&local, &global, 1, MPI_DOUBLE_INT, MPI_MAXLOC, slabs_.comm());
+  MPI_Bcast(at, 3, MPI_INT, global.rank, slabs_.comm());
+  std::ostringstream out;
+  out.precision(4);
+  const double mm = par_.length_scale_mm;
+  out << "(i,j,k) = (" << at[0] << "," << at[1] << "," << at[2] << ") at (" << g.x(grid::Location::cell, at[0]) * mm << ", "
+      << g.y(grid::Location::cell, at[1]) * mm << ", " << g.z(grid::Location::cell, at[2]) * mm << ") mm";
+  return out.str();
 }
 
 double FluidSolver::advance(double t_limit) {

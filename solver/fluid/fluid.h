@@ -45,6 +45,7 @@ struct FluidParameters {
   std::string viscosity_model = "newtonian";
   CarreauYasuda carreau_yasuda = blood_carreau_yasuda();  // nondimensional; default: blood
   double time_scale_s = 0.04;       // d_m/U_m, only to report times in seconds
+  double length_scale_mm = 24;      // d_m, only to report places in mm
   double abort_cfl = 1.0;           // realised CFL above which a step is declared unstable (ours)
   double abort_energy_growth = 10;  // kinetic-energy ratio per step declared unstable (ours)
   // The growth check applies only above this volume-mean ½|u|² (ours): a motion starting from
@@ -181,6 +182,9 @@ class FluidSolver {
   void project(double dt);                          // ∇²φ = ∇·u*/(αΔt), u = u* − αΔt∇φ (eq 9)
   void update_pressure();                           // p ← p + φ                (eq 10)
   void check_stability(double dt);
+  // Where a CFL or energy abort happened (collective): the cell with the largest local
+  // |u|/dx + |v|/dy + |w|/dz (its lower faces), as "(i,j,k) = (...) at (x, y, z) mm".
+  std::string fastest_cell() const;
 
   const grid::Slabs& slabs_;
   FluidParameters par_;

@@ -207,9 +207,9 @@ class AortaInterior {
 };
 
 // The seed's aorta pre-tension (MODEL.md §1: "an external force providing a ground pressure of
-// 60 mmHg in the aortic root"), ours in detail: an outer pressure p on the aorta's wall, a
-// follower load -(-p) A n / 3 per node of each loaded triangle with its inward normal n (i.e.
-// pushing the wall into the lumen), evaluated at the given positions. The triangles of the Darcy
+// 60 mmHg in the aortic root"), ours in detail: an outer pressure p on the aorta's wall, the
+// follower load p A n_in / 3 on each node of each loaded triangle (A its area, n_in its unit
+// normal into the lumen: the load pushes the wall inwards), at the given positions. The triangles of the Darcy
 // outflow (all three nodes tagged kOutflow) carry none: there the blood's pressure falls to the
 // outer fluid's, and an outer load would squeeze the tube shut. Adds to f (mN).
 void add_outer_pressure_loads(const geometry::TriMesh& aorta, const std::vector<Vec3>& x_mm, double pressure_kpa,
@@ -702,6 +702,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       try {
         fields->bodies_frame(group.body(0).time_ms(), group, "unstable");
       } catch (const std::exception&) {
+        // the frame is a help; what is reported is the instability below
       }
     }
     throw;
@@ -780,7 +781,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (fs.aortic_pressure_mmhg > 0) {
     std::ostringstream m;
     m << "aorta pre-tension: ground pressure " << fs.aortic_pressure_mmhg << " mmHg (outer load on the wall outside "
-      << "the Darcy region; the blood inside the aorta, " << aorta_initial_ml << " ml, started at it)";
+      << "the Darcy region; ";
+    if (fs.aortic_pressure_ramp_ms > 0)
+      m << "ramped over " << fs.aortic_pressure_ramp_ms << " ms from the blood at rest)";
+    else
+      m << "the blood inside the aorta, " << aorta_initial_ml << " ml, started at it)";
     result.notes.push_back(m.str());
   }
   if (!is_rank_zero()) result.notes.clear();

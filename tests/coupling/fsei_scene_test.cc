@@ -126,8 +126,11 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   Quiet control;
   const RunResult r = run_fsei(s, control);
   for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
-  for (const auto& name : fsei_metric_names())
-    if (name != "wall_time_s") EXPECT_TRUE(r.metrics.count(name)) << name;
+  for (const auto& name : fsei_metric_names()) {
+    if (name != "wall_time_s") {
+      EXPECT_TRUE(r.metrics.count(name)) << name;
+    }
+  }
   EXPECT_EQ(control.reports, 6);
   EXPECT_NEAR(r.metrics.at("simulated_time_ms"), 3.0, 1e-9);
   // Multirate: neither module stepped beyond its limit; the shells sub-cycle inside each interval.
@@ -207,8 +210,11 @@ TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
     double moved = 0;
     for (std::size_t i = 0; i < lv.size(); ++i)
       for (int c = 0; c < 3; ++c) moved = std::max(moved, std::abs(x[3 * i + c] - lv[i][c]));
-    if (k == 0) EXPECT_EQ(moved, 0.0);
-    else EXPECT_GT(moved, 1e-6);
+    if (k == 0) {
+      EXPECT_EQ(moved, 0.0);
+    } else {
+      EXPECT_GT(moved, 1e-6);
+    }
   }
   EXPECT_EQ(read_doubles(bodies, "frames/2/la_active_tension_kpa", dims).size(), heart.body(geometry::kLaBody).node_count());
   EXPECT_EQ(read_doubles(bodies, "frames/2/mitral_anterior_edge_strain", dims).size(),

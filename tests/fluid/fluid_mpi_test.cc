@@ -116,7 +116,9 @@ TEST(FieldOutput, CompressedScaledFieldsReadBackAsTheScaledPlainOnes) {
   MPI_Barrier(MPI_COMM_WORLD);
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (rank == 0) EXPECT_LT(std::filesystem::file_size(packed), std::filesystem::file_size(plain));
+  if (rank == 0) {
+    EXPECT_LT(std::filesystem::file_size(packed), std::filesystem::file_size(plain));
+  }
 }
 
 }  // namespace
