@@ -17,6 +17,7 @@
 #include "solver/coupling/electro_module.h"
 #include "solver/coupling/fluid_module.h"
 #include "solver/coupling/scheduler.h"
+#include "solver/diagnostics/kinematics.h"
 #include "solver/electro/tissue.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/geometry/tiling.h"
@@ -153,6 +154,28 @@ double disk_flux(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double 
   return q;
 }
 
+// Mean z-velocity (nondimensional, + along +z) over the z-faces of the disk of `radius_mm`
+// around `centre_mm` on the z-face plane nearest to its z: a Doppler-like sample volume (ours:
+// one face layer). Collective; 0 when the disk holds no face.
+double disk_mean_w(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
+  const grid::Slabs& slabs = fluid.slabs();
+  const grid::Grid& g = slabs.grid();
+  const Vec3 c = centre_mm / kDmMm;
+  const double r = radius_mm / kDmMm;
+  const int k = static_cast<int>(std::lround(c.z() / g.dz()));
+  double sum[2] = {0, 0};  // sum of w, faces
+  if (k >= slabs.k_begin() && k < slabs.k_begin() + slabs.k_count()) {
+    const grid::ZFaceField& w = fluid.velocity().w;
+    for (int j = 0; j < g.ny(); ++j)
+      for (int i = 0; i < g.nx(); ++i) {
+        const double dx = g.x(grid::Location::z_face, i) - c.x(), dy = g.y(grid::Location::z_face, j) - c.y();
+        if (dx * dx + dy * dy <= r * r) sum[0] += w(i, j, k - slabs.k_begin()), sum[1] += 1;
+      }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sum, 2, MPI_DOUBLE, MPI_SUM, slabs.comm());
+  return sum[1] > 0 ? sum[0] / sum[1] : 0.0;
+}
+
 // Whether a point lies inside the aorta (ours, for the initial pressure field): within reach_mm
 // of an aorta node and on the inner side of the nearest node's inward normal, but not on the
 // LV's side of the plane (z >= plane_z) within two orifice radii of the aortic axis (there the
@@ -239,7 +262,8 @@ const std::vector<std::string>& fsei_metric_names() {
       "lv_pressure_start_mmhg", "lv_pressure_max_mmhg", "la_pressure_max_mmhg", "aortic_root_pressure_max_mmhg",
       "lv_volume_start_ml", "lv_volume_min_ml", "lv_volume_end_ml", "la_volume_start_ml", "la_volume_end_ml",
       "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
-      "lv_volume_balance_ml", "kinetic_energy_max_mj", "simulated_time_ms", "fluid_steps", "structure_substeps",
+      "lv_volume_balance_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
+      "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "simulated_time_ms", "fluid_steps", "structure_substeps",
       "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
       "ep_wall_s",
       "fluid_wall_s", "structure_wall_s", "wall_time_s"};
@@ -612,6 +636,16 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // 8. run, sampling at outputs.time_series_interval_ms
   RunResult result;
   std::vector<double> t_ms, p_lv, p_la, p_ao, v_lv, v_la, q_ao, q_mi, ke;
+  std::vector<double> twist, gls, gcs, u_mitral_tips, u_aortic_tips;
+  // Doppler-like sample volumes (ours): disks of half the orifice radius (at most 5 mm) on the
+  // valves' axes, at the closed mitral leaflets' tips (their coaptation depth below the plane)
+  // and at the closed aortic cusps' tips (their height above it); velocities along the flow
+  // (into the LV through the mitral valve, into the aorta through the aortic valve), in m/s.
+  const Vec3 mitral_tips = heart.plane.mitral_centre_mm + heart.layout.mitral_coaptation_depth_mm * heart.lv_axis_direction;
+  const Vec3 aortic_tips = heart.plane.aortic_centre_mm - heart.layout.cusp_coaptation_height_mm * heart.lv_axis_direction;
+  const double mitral_disk_mm = std::min(5.0, 0.5 * heart.plane.mitral_radius_mm);
+  const double aortic_disk_mm = std::min(5.0, 0.5 * heart.plane.aortic_radius_mm);
+  const geometry::TriMesh& lv_reference = heart.body(geometry::kLvBody);
   auto sample = [&] {
     const auto p = probe_pressures(fluid, probes, fs.probe_radius_mm);
     t_ms.push_back(fluid_module.time_ms());
@@ -625,9 +659,19 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     q_ao.push_back(-disk_flux(fluid, heart.plane.aortic_centre_mm, heart.plane.aortic_radius_mm) * ml_s_per_unit);
     q_mi.push_back(disk_flux(fluid, heart.plane.mitral_centre_mm, heart.plane.mitral_radius_mm) * ml_s_per_unit);
     ke.push_back(fluid.diagnostics().kinetic_energy * kinetic_mj_per_unit);
-    for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back()})
+    // the LV wall's twist and global strains from the built (end-diastolic, stress-free) shape
+    const diagnostics::WallKinematics wk =
+        diagnostics::wall_kinematics(lv_reference, group.body(kLv).positions_mm(), heart.lv_axis_direction);
+    twist.push_back(wk.twist_deg);
+    gls.push_back(wk.longitudinal_strain);
+    gcs.push_back(wk.circumferential_strain);
+    u_mitral_tips.push_back(disk_mean_w(fluid, mitral_tips, mitral_disk_mm) * kUmMmPerMs);
+    u_aortic_tips.push_back(-disk_mean_w(fluid, aortic_tips, aortic_disk_mm) * kUmMmPerMs);
+    for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
+                     twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back()})
       if (!std::isfinite(v))
-        throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(), "a chamber pressure, volume or flow is not finite");
+        throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
+                               "a chamber pressure, volume, flow, wall strain or tip velocity is not finite");
   };
   auto caps_closed = [&](double t) {  // from the LA stimulus to the next LV stimulus
     const double phase = std::fmod(t, period_ms);
@@ -732,6 +776,16 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     through_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * ((q_ao[i] - q_mi[i]) + (q_ao[i - 1] - q_mi[i - 1]));
   M["lv_volume_balance_ml"] = (v_lv.back() - v_lv.front()) + through_ml;
   M["kinetic_energy_max_mj"] = max_of(ke);
+  auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
+    double best = 0;
+    for (double x : v) if (std::abs(x) > std::abs(best)) best = x;
+    return best;
+  };
+  M["lv_twist_peak_deg"] = largest(twist);
+  M["lv_longitudinal_strain_min"] = min_of(gls);
+  M["lv_circumferential_strain_min"] = min_of(gcs);
+  M["mitral_tip_velocity_max_m_s"] = max_of(u_mitral_tips);
+  M["aortic_tip_velocity_max_m_s"] = max_of(u_aortic_tips);
   M["simulated_time_ms"] = t;
   const auto& st = scheduler.stats();
   const std::size_t fluid_stage = with_ep ? 1 : 0;
@@ -763,6 +817,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   add("aortic_flow_ml_s", "ml/s", q_ao);
   add("mitral_flow_ml_s", "ml/s", q_mi);
   add("kinetic_energy_mj", "mJ", ke);
+  add("lv_twist_deg", "deg", twist);
+  add("lv_longitudinal_strain", "", gls);
+  add("lv_circumferential_strain", "", gcs);
+  add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
+  add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
   result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +
                          std::to_string(pts.ny) + "x" + std::to_string(pts.nz) + " points), " +
                          std::to_string(markers.size()) + " markers; chamber pressures relative to the outer-fluid probe");

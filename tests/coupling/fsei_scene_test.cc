@@ -149,6 +149,27 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   // The LV keeps its blood to 0.01 % over these 3 ms.
   EXPECT_LT(std::abs(r.metrics.at("lv_volume_end_ml") - r.metrics.at("lv_volume_start_ml")),
             1e-4 * r.metrics.at("lv_volume_start_ml"));
+  // Wall kinematics and Doppler-like tip velocities: zero (to round-off) at the built shape and the blood at
+  // rest (t = 0), small behind the closed valves (< 1 % strain, < 0.1 deg, < 5 cm/s; a beat's
+  // peaks are ~ -15 %, ~10 deg and ~1 m/s: MODEL.md §8).
+  auto series = [&](const std::string& name) -> const std::vector<double>& {
+    for (const auto& x : r.series)
+      if (x.name == name) return x.values;
+    ADD_FAILURE() << "no series " << name;
+    return r.series.front().values;
+  };
+  for (const char* name : {"lv_twist_deg", "lv_longitudinal_strain", "lv_circumferential_strain", "mitral_tip_velocity_m_s",
+                           "aortic_tip_velocity_m_s"}) {
+    const auto& v = series(name);
+    ASSERT_EQ(v.size(), p_lv.size()) << name;
+    EXPECT_NEAR(v.front(), 0.0, 1e-12) << name;  // round-off of the deformation gradient
+  }
+  for (double x : series("lv_twist_deg")) EXPECT_LT(std::abs(x), 0.1);
+  for (const char* name : {"lv_longitudinal_strain", "lv_circumferential_strain"})
+    for (double x : series(name)) EXPECT_LT(std::abs(x), 0.01) << name;
+  for (const char* name : {"mitral_tip_velocity_m_s", "aortic_tip_velocity_m_s"})
+    for (double x : series(name)) EXPECT_LT(std::abs(x), 0.05) << name;
+  EXPECT_GT(std::abs(series("lv_longitudinal_strain").back()), 0.0);  // the wall did move
 }
 
 // The seed's aorta pre-tension (fsei.aortic_pressure_mmhg, 60 mmHg by default): the blood in the
