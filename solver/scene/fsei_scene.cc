@@ -133,37 +133,15 @@ std::vector<double> probe_pressures(const fluid::FluidSolver& fluid, const std::
   return mean;
 }
 
-// Volume flux (nondimensional, + along +z) through the disk of `radius_mm` around `centre_mm`
-// on the z-face plane nearest to its z. Collective.
-double disk_flux(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
+// The z-velocity summed over the z-faces of the disk of `radius_mm` around `centre_mm` on the
+// z-face plane nearest to its z, and the number of those faces (nondimensional). Collective.
+std::array<double, 2> disk_sum_w(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
   const grid::Slabs& slabs = fluid.slabs();
   const grid::Grid& g = slabs.grid();
   const Vec3 c = centre_mm / kDmMm;
   const double r = radius_mm / kDmMm;
   const int k = static_cast<int>(std::lround(c.z() / g.dz()));
-  double q = 0;
-  if (k >= slabs.k_begin() && k < slabs.k_begin() + slabs.k_count()) {
-    const grid::ZFaceField& w = fluid.velocity().w;
-    for (int j = 0; j < g.ny(); ++j)
-      for (int i = 0; i < g.nx(); ++i) {
-        const double dx = g.x(grid::Location::z_face, i) - c.x(), dy = g.y(grid::Location::z_face, j) - c.y();
-        if (dx * dx + dy * dy <= r * r) q += w(i, j, k - slabs.k_begin()) * g.dx() * g.dy();
-      }
-  }
-  MPI_Allreduce(MPI_IN_PLACE, &q, 1, MPI_DOUBLE, MPI_SUM, slabs.comm());
-  return q;
-}
-
-// Mean z-velocity (nondimensional, + along +z) over the z-faces of the disk of `radius_mm`
-// around `centre_mm` on the z-face plane nearest to its z: a Doppler-like sample volume (ours:
-// one face layer). Collective; 0 when the disk holds no face.
-double disk_mean_w(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
-  const grid::Slabs& slabs = fluid.slabs();
-  const grid::Grid& g = slabs.grid();
-  const Vec3 c = centre_mm / kDmMm;
-  const double r = radius_mm / kDmMm;
-  const int k = static_cast<int>(std::lround(c.z() / g.dz()));
-  double sum[2] = {0, 0};  // sum of w, faces
+  std::array<double, 2> sum{0, 0};
   if (k >= slabs.k_begin() && k < slabs.k_begin() + slabs.k_count()) {
     const grid::ZFaceField& w = fluid.velocity().w;
     for (int j = 0; j < g.ny(); ++j)
@@ -172,7 +150,20 @@ double disk_mean_w(const fluid::FluidSolver& fluid, const Vec3& centre_mm, doubl
         if (dx * dx + dy * dy <= r * r) sum[0] += w(i, j, k - slabs.k_begin()), sum[1] += 1;
       }
   }
-  MPI_Allreduce(MPI_IN_PLACE, sum, 2, MPI_DOUBLE, MPI_SUM, slabs.comm());
+  MPI_Allreduce(MPI_IN_PLACE, sum.data(), 2, MPI_DOUBLE, MPI_SUM, slabs.comm());
+  return sum;
+}
+
+// Volume flux (nondimensional, + along +z) through that disk. Collective.
+double disk_flux(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
+  const grid::Grid& g = fluid.slabs().grid();
+  return disk_sum_w(fluid, centre_mm, radius_mm)[0] * g.dx() * g.dy();
+}
+
+// Mean z-velocity (nondimensional) over that disk: a Doppler-like sample volume (ours: one face
+// layer). Collective; 0 when the disk holds no face.
+double disk_mean_w(const fluid::FluidSolver& fluid, const Vec3& centre_mm, double radius_mm) {
+  const std::array<double, 2> sum = disk_sum_w(fluid, centre_mm, radius_mm);
   return sum[1] > 0 ? sum[0] / sum[1] : 0.0;
 }
 
