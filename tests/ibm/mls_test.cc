@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include <Eigen/Dense>
 #include <omp.h>
@@ -172,6 +173,17 @@ void fill_random(grid::Field<L>& f, std::mt19937& gen) {
     for (int j = -1; j <= f.ny(); ++j)
       for (int i = -1; i <= f.nx(); ++i) f(i, j, k) = N(gen);
 }
+// The three face fields of a velocity, filled with N(0, 1) from gen (u, then v, then w).
+struct RandomFaces {
+  grid::XFaceField u;
+  grid::YFaceField v;
+  grid::ZFaceField w;
+  RandomFaces(const grid::Slabs& slabs, std::mt19937& gen) : u(slabs), v(slabs), w(slabs) {
+    fill_random(u, gen);
+    fill_random(v, gen);
+    fill_random(w, gen);
+  }
+};
 template <Location L>
 double contraction_error(const grid::Field<L>& f, const Vec3& X, double& scale) {
   const MlsGradientStencil s = mls_gradient_stencil(kGrid, L, X);
@@ -193,13 +205,9 @@ double contraction_error(const grid::Field<L>& f, const Vec3& X, double& scale) 
 TEST(Mls, FastPathsEqualTheStencils) {
   const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
   std::mt19937 gen(17);
-  grid::XFaceField u(slabs);
-  grid::YFaceField v(slabs);
-  grid::ZFaceField w(slabs);
+  const RandomFaces faces(slabs, gen);
+  const auto& [u, v, w] = std::tie(faces.u, faces.v, faces.w);
   grid::CellField p(slabs);
-  fill_random(u, gen);
-  fill_random(v, gen);
-  fill_random(w, gen);
   fill_random(p, gen);
   double worst = 0, scale = 0;
   bool faces_equal = true;
@@ -327,12 +335,8 @@ TEST(Transfer, RebuildSkipsUnmovedBodiesAndMatchesAFreshBuild) {
   const int b = markers.add_body(sphere_mesh(Vec3(0.9, 0.4, 1.1), 0.25, 2), "b", o);
   Transfer t(slabs, markers);
   std::mt19937 gen(9);
-  grid::XFaceField u(slabs);
-  grid::YFaceField v(slabs);
-  grid::ZFaceField w(slabs);
-  fill_random(u, gen);
-  fill_random(v, gen);
-  fill_random(w, gen);
+  const RandomFaces faces(slabs, gen);
+  const auto& [u, v, w] = std::tie(faces.u, faces.v, faces.w);
   EXPECT_EQ(t.rebuild(), 0);  // nothing moved
   markers.set_rigid_motion(b, Vec3(0.05, 0.02, -0.03), Vec3(0, 0, 1), Vec3(0.9, 0.4, 1.1));
   markers.advance_rigid(1.0);  // body a has no motion: its markers stay where they were
@@ -358,12 +362,8 @@ TEST(Transfer, RebuildToleranceKeepsStencilsForSmallMoves) {
   Transfer t(slabs, markers);
   t.set_rebuild_tolerance(0.1 * markers.h());
   std::mt19937 gen(11);
-  grid::XFaceField u(slabs);
-  grid::YFaceField v(slabs);
-  grid::ZFaceField w(slabs);
-  fill_random(u, gen);
-  fill_random(v, gen);
-  fill_random(w, gen);
+  const RandomFaces faces(slabs, gen);
+  const auto& [u, v, w] = std::tie(faces.u, faces.v, faces.w);
   const auto before = t.interpolate({u, v, w});
   markers.set_rigid_motion(b, Vec3(0.06 * markers.h(), 0, 0), Vec3::Zero(), Vec3(0.9, 0.4, 1.1));
   markers.advance_rigid(1.0);  // 0.06 h: within the tolerance
