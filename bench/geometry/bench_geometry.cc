@@ -67,6 +67,7 @@ static void BM_BuildTileAndCheckMarkers(benchmark::State& state) {
     CheckOptions o;
     o.plane_z_mm = heart.plane.z_mm;
     o.plane_tolerance_mm = 1e-9 * heart.plane.z_mm;
+    o.aortic_crown_height_mm = heart.layout.aortic_crown_height_mm;
     o.degenerate_min_angle_deg = 0.1;
     std::size_t issues = 0;
     for (const auto* t : ptrs) issues += check_body(*t, o).size();

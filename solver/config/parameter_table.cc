@@ -86,14 +86,18 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(tissue.la.fung_c_pa, "Pa", 12.1, 0, 1e5, "Fung c, LA."));
   t.push_back(SYSTOLE_REAL(tissue.la.alpha_f, "", 49.56, 0, 1000, "Fung fibre exponent, LA."));
   t.push_back(SYSTOLE_REAL(tissue.la.alpha_c, "", 5.29, 0, 1000, "Fung cross-fibre exponent, LA."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.mitral_leaflets.fung_c_pa, "Pa", 9.7, 0, 1e5,
-                                    "Fung c, mitral leaflets."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.mitral_leaflets.fung_c_pa, "Pa", 3702, 0, 1e5,
+                                    "Fung c, mitral leaflets (ours: the seed's 9.7 read in units of rho U^2 = 381.6 Pa; "
+                                    "with 9.7 Pa the closed valves tear or invert under the aortic and LV "
+                                    "pressures, docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(tissue.mitral_leaflets.alpha_f, "", 49.56, 0, 1000,
                            "Fung fibre exponent, mitral leaflets."));
   t.push_back(SYSTOLE_REAL(tissue.mitral_leaflets.alpha_c, "", 5.29, 0, 1000,
                            "Fung cross-fibre exponent, mitral leaflets."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.aortic_leaflets.fung_c_pa, "Pa", 9.7, 0, 1e5,
-                                    "Fung c, aortic cusps."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(tissue.aortic_leaflets.fung_c_pa, "Pa", 3702, 0, 1e5,
+                                    "Fung c, aortic cusps (ours: the seed's 9.7 read in units of rho U^2 = 381.6 Pa; "
+                                    "with 9.7 Pa the closed valves tear or invert under the aortic and LV "
+                                    "pressures, docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(tissue.aortic_leaflets.alpha_f, "", 49.56, 0, 1000,
                            "Fung fibre exponent, aortic cusps."));
   t.push_back(SYSTOLE_REAL(tissue.aortic_leaflets.alpha_c, "", 5.29, 0, 1000,
@@ -140,6 +144,12 @@ std::vector<Param> build_table() {
                            "Gap between the free edges of the neighbouring closed mitral leaflets and aortic cusps "
                            "(ours): 0 gives one orifice-ring edge (the free edges end on ring nodes, about "
                            "target_edge_mm); else it must be shorter than a ring edge (docs/geometry.md)."));
+  t.push_back(SYSTOLE_REAL(geometry.aortic_commissure_height_per_radius, "-", 0.8, 0, 2,
+                           "Height of the aortic commissures above the valvular plane, over the aortic orifice "
+                           "radius (ours): the cusps hang from a crown-shaped attachment on the root wall, fibres "
+                           "from commissure to commissure, with vertical coaptation strips; at least 0.6 (the "
+                           "closed cusps' tips are at 0.5). 0 gives the flat-annulus cusps of sessions 1-7, "
+                           "which do not carry the aortic pressure (docs/geometry.md, docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_root_diameter_mm, "mm", 40, 15, 70, "Aortic root diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_arch_diameter_mm, "mm", 30, 10, 60, "Aortic arch diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_descending_diameter_mm, "mm", 22, 8, 50,

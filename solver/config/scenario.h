@@ -40,6 +40,7 @@ struct Geometry {
   double target_edge_mm;
   double marker_spacing_fraction;
   double valve_gap_mm;  // between the free edges of neighbouring closed leaflets / cusps (ours)
+  double aortic_commissure_height_per_radius;  // crown-shaped cusp attachment; 0: flat annulus (ours)
 };
 
 struct Stimulus {

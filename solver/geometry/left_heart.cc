@@ -32,6 +32,8 @@ constexpr double kLayoutGapMm = 4.0;      // design gap used to place the descen
 constexpr double kPatchRadiusMm = 5.0;    // Bachmann and His stimulus patches
 constexpr double kOutflowLengthPerDiameter = 1.5;
 constexpr double kDescendingTaperPerDiameter = 2.0;
+constexpr double kCrownInsetPerEdge = 0.15;  // cusp attachment inside the root's faces
+constexpr int kLeafletSmoothingPasses = 10;  // mitral leaflets: 3D Laplacian passes
 constexpr double kPlaneBandMm = 3.0;      // clearance is not measured this close to the plane
 
 void require(bool ok, const std::string& message) {
@@ -137,7 +139,7 @@ struct GraphBoundary {
 };
 TriMesh graph_surface(std::string_view name, const std::vector<GraphBoundary>& boundary,
                       const std::vector<Vec2>& interior, const std::function<double(const Vec2&)>& height,
-                      Tissue tissue, double thickness) {
+                      Tissue tissue, double thickness, int smoothing_passes = 0) {
   TriMesh mesh;
   mesh.name = std::string(name);
   mesh.kind = BodyKind::kLeaflet;
@@ -150,9 +152,174 @@ TriMesh graph_surface(std::string_view name, const std::vector<GraphBoundary>& b
     mesh.add_node(Vec3(p.x(), p.y(), height(p)));
     pts.push_back(p);
   }
-  for (const auto& t : detail::delaunay_2d(pts)) mesh.add_triangle(t[0], t[2], t[1], tissue, thickness);
+  const auto tris = detail::delaunay_2d(pts);
+  for (const auto& t : tris) mesh.add_triangle(t[0], t[2], t[1], tissue, thickness);
+  // Laplacian smoothing of the interior nodes in 3D, projected back on the height field (ours):
+  // the plan lattice is uniform but the surface is steep near the free edges, where plain plan
+  // Delaunay leaves triangles of 9-10 degrees that bending then collapses under load
+  // (docs/fsei.md). A pass that would turn a triangle over in plan is not applied.
+  if (smoothing_passes > 0) {
+    const std::size_t nb = boundary.size(), nn = mesh.node_count();
+    std::vector<std::vector<std::int32_t>> nbr(nn);
+    for (const auto& t : tris)
+      for (int a = 0; a < 3; ++a) {
+        nbr[t[a]].push_back(t[(a + 1) % 3]);
+        nbr[t[a]].push_back(t[(a + 2) % 3]);
+      }
+    auto plan_area = [&](const std::vector<Vec3>& x, const Tri& t) {
+      const Vec2 a = x[t[0]].head<2>(), b = x[t[1]].head<2>(), c = x[t[2]].head<2>();
+      return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+    };
+    for (int pass = 0; pass < smoothing_passes; ++pass) {
+      std::vector<Vec3> next = mesh.position_mm;
+      for (std::size_t i = nb; i < nn; ++i) {
+        Vec3 m = Vec3::Zero();
+        for (auto j : nbr[i]) m += mesh.position_mm[j];
+        m /= static_cast<double>(nbr[i].size());
+        // the point of the height field closest to m (Gauss-Newton from the node's own (x, y))
+        Vec2 u = mesh.position_mm[i].head<2>();
+        for (int it = 0; it < 4; ++it) {
+          const double e = 1e-4, z = height(u);
+          const Vec2 grad((height(u + Vec2(e, 0)) - height(u - Vec2(e, 0))) / (2 * e),
+                          (height(u + Vec2(0, e)) - height(u - Vec2(0, e))) / (2 * e));
+          const Vec3 r = m - Vec3(u.x(), u.y(), z);
+          Eigen::Matrix2d jtj = Eigen::Matrix2d::Identity() + grad * grad.transpose();
+          const Vec2 jtr = r.head<2>() + grad * r.z();
+          u += jtj.ldlt().solve(jtr);
+        }
+        next[i] = Vec3(u.x(), u.y(), height(u));
+      }
+      bool ok = true;
+      for (const auto& t : tris) ok = ok && plan_area(next, t) > 0;
+      if (!ok) break;
+      mesh.position_mm = std::move(next);
+    }
+  }
   return mesh;
 }
+
+// ---- the crown-shaped aortic valve (geometry.aortic_commissure_height_per_radius > 0), ours -----------
+// Cusp k of the closed valve, centred on the azimuth phi_k = 120 k degrees about the root axis
+// through A (up = -z). It is the surface swept by the quadratic Bezier curves, for s in [-1, 1],
+//   B(s, t) = (1 - t)^2 W(s) + 2 t (1 - t) Q(s) + t^2 F(s),   t in [0, 1] from wall to free edge:
+// - W(s), the attachment, on the root wall at azimuth phi_k + s (60 deg - delta), height H s^2
+//   (a U from the commissure tops at height H down to the nadir on the orifice ring);
+// - F(s), the free edge, straight from the tip T (half_gap / sin 60 deg from the axis towards
+//   phi_k, height h_tip) to the commissure top W(+-1); delta sets W(+-1) half_gap from the
+//   commissure's radius so that neighbouring cusps stay 2 half_gap apart;
+// - Q(s) = F(s) - c (1 - |s|) up with c = h_tip: the curves leave the wall towards the axis and
+//   end vertically, so that near the free edges neighbouring cusps face each other across
+//   vertical coaptation strips, pressed together by the aortic pressure.
+// Fibres along dB/ds: every fibre runs from one commissure to the other, and the fibres near
+// the wall end on the anchored attachment, so the seed's fibre-stiff tissue carries the load
+// (docs/fsei.md: the flat-annulus cusps' fibres end on free edges, their cross-fibre law cannot).
+// Meshed by Delaunay in a lens-shaped parameter plane (X, Y) = (s Ls, t Lt (1 - s^2)), Ls and
+// Lt the half length of the attachment and the length of the middle curve, then mapped.
+struct CrownCusps {
+  Vec3 centre;                 // the aortic orifice centre, in the valvular plane
+  double r_a, H, h_tip, half_gap, h_mesh, thickness;
+  double inset;  // the attachment's distance inside the root's analytic wall
+  std::function<double(double, double)> wall_radius;  // (height above the plane, azimuth) -> mm
+
+  Vec3 up() const { return -Vec3::UnitZ(); }
+  Vec3 wall_point(int k, double s) const {
+    const double phi = 2 * M_PI * k / 3;
+    const double th = phi + s * (M_PI / 3 - commissure_offset_rad()), z = H * s * s;
+    return centre + (wall_radius(z, th) - inset) * Vec3(std::cos(th), std::sin(th), 0) + z * up();
+  }
+  // The attachment's commissure ends sit this far (in azimuth) inside the cusp's 120 degrees.
+  double commissure_offset_rad() const {
+    return std::asin(std::min(1.0, half_gap / (wall_radius(H, M_PI / 3) - inset)));
+  }
+  Vec3 tip(int k) const {
+    const double phi = 2 * M_PI * k / 3;
+    return centre + half_gap / std::sin(M_PI / 3) * Vec3(std::cos(phi), std::sin(phi), 0) + h_tip * up();
+  }
+  Vec3 free_edge(int k, double s) const {
+    return tip(k) + std::abs(s) * (wall_point(k, s < 0 ? -1.0 : 1.0) - tip(k));
+  }
+  Vec3 point(int k, double s, double t) const {
+    const Vec3 w = wall_point(k, s), f = free_edge(k, s);
+    const Vec3 q = f - h_tip * (1 - std::abs(s)) * up();
+    return (1 - t) * (1 - t) * w + 2 * t * (1 - t) * q + t * t * f;
+  }
+  // Length of the curve s -> point(k, s, t) over [s0, s1] or t -> point(k, s, t) over [t0, t1].
+  template <class F>
+  static double length(const F& curve, double a, double b) {
+    double len = 0;
+    Vec3 prev = curve(a);
+    for (int i = 1; i <= 400; ++i) {
+      const Vec3 p = curve(a + (b - a) * i / 400);
+      len += (p - prev).norm();
+      prev = p;
+    }
+    return len;
+  }
+
+  TriMesh build(int k, std::string_view name) const {
+    TriMesh mesh;
+    mesh.name = std::string(name);
+    mesh.kind = BodyKind::kLeaflet;
+    const double Ls = 0.5 * length([&](double s) { return wall_point(k, s); }, -1, 1);
+    const double Lt = length([&](double t) { return point(k, 0, t); }, 0, 1);
+    std::vector<Vec2> uv;  // (s, t) of each node
+    std::vector<Vec2> xy;  // its lens-plane position
+    auto lens = [&](double s, double t) { return Vec2(s * Ls, t * Lt * (1 - s * s)); };
+    auto add = [&](double s, double t, std::uint32_t tags) {
+      mesh.add_node(point(k, s, t), tags);
+      uv.emplace_back(s, t);
+      xy.push_back(lens(s, t));
+    };
+    // Attachment, equal arclength in 3D, commissures included (anchors: held like the annulus).
+    {
+      const int dense = 2000;
+      std::vector<double> param(dense + 1), arc(dense + 1, 0.0);
+      for (int i = 0; i <= dense; ++i) {
+        param[i] = -1 + 2.0 * i / dense;
+        if (i) arc[i] = arc[i - 1] + (wall_point(k, param[i]) - wall_point(k, param[i - 1])).norm();
+      }
+      const int n = std::max(6, static_cast<int>(std::ceil(arc.back() / h_mesh)));
+      for (double s : detail::equal_arclength_stations(param, arc, n)) add(s, 0, kAnchor | kAorticAnnulus);
+    }
+    // Free edge: two straight halves, commissures excluded (already added), tip included.
+    const int nf = std::max(3, static_cast<int>(std::ceil((wall_point(k, 1) - tip(k)).norm() / h_mesh)));
+    for (int j = nf - 1; j >= 1; --j) add(-static_cast<double>(j) / nf, 1, kFreeEdge);
+    add(0, 1, kFreeEdge);
+    for (int j = 1; j < nf; ++j) add(static_cast<double>(j) / nf, 1, kFreeEdge);
+    const std::size_t n_boundary = xy.size();
+    // Interior: a hexagonal lattice of the lens plane, kept 0.6 h away from its boundary.
+    const double margin = 0.6 * h_mesh;
+    for (const Vec2& p : detail::hex_lattice(Vec2(-Ls, 0), Vec2(Ls, Lt), h_mesh)) {
+      const double s = p.x() / Ls;
+      if (std::abs(s) >= 1) continue;
+      const double top = Lt * (1 - s * s);
+      if (p.y() < margin || p.y() > top - margin) continue;
+      double d = 1e300;
+      for (std::size_t i = 0; i < n_boundary; ++i) d = std::min(d, (p - xy[i]).norm());
+      if (d < margin) continue;
+      add(s, p.y() / top, kRegionNone);
+    }
+    // The lens is convex (under a parabola), so Delaunay covers exactly it.
+    for (const auto& t : detail::delaunay_2d(xy)) mesh.add_triangle(t[0], t[1], t[2], Tissue::kAorticLeaflet, thickness);
+    // Orientation: normals face the aortic side (the sinus, above the belly), as the flat cusps'
+    // face -z: the triangle nearest the belly's middle must face up.
+    {
+      const Vec3 belly = point(k, 0, 0.3);
+      std::size_t best = 0;
+      for (std::size_t tr = 1; tr < mesh.triangle_count(); ++tr)
+        if ((mesh.centroid(tr) - belly).squaredNorm() < (mesh.centroid(best) - belly).squaredNorm()) best = tr;
+      if (mesh.unit_normal(best).dot(up()) < 0) mesh.flip_orientation();
+    }
+    for (std::size_t tr = 0; tr < mesh.triangle_count(); ++tr) {
+      const auto& v = mesh.tri[tr];
+      const Vec2 c = (uv[v[0]] + uv[v[1]] + uv[v[2]]) / 3.0;
+      const double e = 1e-3;
+      const Vec3 along = point(k, std::min(1.0, c.x() + e), c.y()) - point(k, std::max(-1.0, c.x() - e), c.y());
+      mesh.fibre[tr] = tangent_in_triangle(mesh, tr, along, Vec3::UnitX());
+    }
+    return mesh;
+  }
+};
 
 }  // namespace
 
@@ -447,8 +614,9 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
     if (!ring_gap)
       for (double y : {-w_half, w_half}) boundary.push_back({Vec3(x_m + sgn * x_f, y, 0), kAnchor | kMitralAnnulus});
     auto z_free = [&](double s) { return z_c * std::max(0.0, 1 - s * s); };
-    // Free-edge nodes equally spaced along the 3D edge (it is steep near the commissures).
-    const auto fe = meridian_stations([&](double s) { return Vec2(s * w_half, z_free(s)); }, 1, -1, h_leaf, 2);
+    // Free-edge nodes equally spaced along the 3D edge (it is steep near the commissures), at
+    // the ring spacing, which is about the interior's 3D spacing (h_leaf is its plan spacing).
+    const auto fe = meridian_stations([&](double s) { return Vec2(s * w_half, z_free(s)); }, 1, -1, h_ring, 2);
     for (std::size_t j = 1; j + 1 < fe.size(); ++j) {
       const double s = fe[j];
       const double bulge = 1e-4 * w_half * (1 - s * s);  // keeps the domain strictly convex
@@ -467,7 +635,8 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
       return d_arc / (d_arc + d_chord + 1e-300) * z_free(rel.y() / w_half);
     };
     TriMesh leaf = graph_surface(side == 0 ? kMitralAnteriorBody : kMitralPosteriorBody, boundary, interior,
-                                 height, Tissue::kMitralLeaflet, g.mitral_leaflet_thickness_mm);
+                                 height, Tissue::kMitralLeaflet, g.mitral_leaflet_thickness_mm,
+                                 kLeafletSmoothingPasses);
     // Fibres along the free edge (the coaptation line, y).
     for (std::size_t tr = 0; tr < leaf.triangle_count(); ++tr)
       leaf.fibre[tr] = tangent_in_triangle(leaf, tr, Vec3::UnitY(), Vec3::UnitX());
@@ -492,7 +661,8 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   // annulus, nothing carries the free edges but their contact.
   const double h_c = kCuspHeightPerRadius * r_a;
   lay.cusp_coaptation_height_mm = h_c;
-  {
+  const bool crown = g.aortic_commissure_height_per_radius > 0;  // the curtain cusps, built with the root below
+  if (!crown) {
     const double half_ring_edge = r_a * std::sin(M_PI / n_a);
     require(g.valve_gap_mm < 2 * half_ring_edge,
             "geometry.valve_gap_mm = " + num(g.valve_gap_mm) + " must be shorter than the aortic ring edge (" +
@@ -645,6 +815,32 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
     if (s <= s_arch0) return root_base(s) + lobe(th) * amp * std::sin(M_PI * s / y_stj);
     return mean_radius(s);
   };
+  // The crown: the root wall is held (anchored, ours) up to one ring spacing above the cusps'
+  // attachment, so that the attachment stays sealed against it; 0 without the crown.
+  std::function<double(double)> crown_hold_height = [](double) { return 0.0; };
+  const double crown_H = g.aortic_commissure_height_per_radius * r_a;
+  lay.aortic_commissure_height_mm = crown ? crown_H : 0.0;
+  lay.aortic_crown_height_mm = crown ? crown_H + 0.866 * h : 0.0;
+  if (crown) {
+    const double H = crown_H;
+    require(g.aortic_commissure_height_per_radius >= kCuspHeightPerRadius + 0.1 && H < 0.8 * y_stj,
+            "geometry.aortic_commissure_height_per_radius = " + num(g.aortic_commissure_height_per_radius) +
+                " must be at least " + num(kCuspHeightPerRadius + 0.1) + " (the closed cusps' tips are at " +
+                num(kCuspHeightPerRadius) + " radii) and put the commissures (" + num(H) +
+                " mm) below 0.8 x the root height (" + num(0.8 * y_stj) + " mm); 0 gives the flat-annulus cusps");
+    const double half_ring_edge = r_a * std::sin(M_PI / n_a);
+    const double half_gap = g.valve_gap_mm == 0 ? half_ring_edge : 0.5 * g.valve_gap_mm;
+    CrownCusps crown_cusps{A, r_a, H, h_c, half_gap, 0.8 * h_ring,
+                           g.aortic_leaflet_thickness_mm, kCrownInsetPerEdge * h,
+                           [&](double z_up, double th) { return radius(std::clamp(z_up, 0.0, s_arch0), th); }};
+    for (int k = 0; k < 3; ++k) heart.bodies.push_back(crown_cusps.build(k, kAorticCuspBodies[k]));
+    const double sweep = M_PI / 3 - crown_cusps.commissure_offset_rad();
+    crown_hold_height = [H, sweep, margin = 0.866 * h](double th) {
+      const double rel = std::abs(std::remainder(th, 2 * M_PI / 3));  // from the nearest cusp centre
+      return H * std::min(1.0, std::pow(rel / sweep, 2)) + margin;
+    };
+  }
+
   TriMesh aorta;
   aorta.name = std::string(kAortaBody);
   aorta.kind = BodyKind::kVessel;
@@ -679,6 +875,9 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
       const std::uint32_t tags = s >= s_outflow - 1e-9 ? kOutflow : kRegionNone;
       Ring ring = add_ring(aorta, ring_count(mean_radius(s), h), centre(s), f1, f2,
                            [&](double th) { return radius(s, th); }, tags);
+      if (s <= s_arch0)  // at the root the frame is (x, y): ring angles are azimuths about A
+        for (std::size_t i = 0; i < ring.node.size(); ++i)
+          if (s <= crown_hold_height(ring.angle[i])) aorta.region[ring.node[i]] |= kAnchor | kAorticAnnulus;
       const std::size_t before = tris.size();
       detail::stitch_rings(prev, ring, tris);
       tri_ring.insert(tri_ring.end(), tris.size() - before, static_cast<int>(k - 1));
@@ -744,6 +943,7 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   options.plane_z_mm = heart.plane.z_mm;
   options.plane_tolerance_mm = 1e-9 * (1 + std::abs(heart.plane.z_mm));
   options.degenerate_min_angle_deg = 0.1;
+  options.aortic_crown_height_mm = lay.aortic_crown_height_mm;
   for (const auto& b : heart.bodies) {
     auto bi = check_body(b, options);
     issues.insert(issues.end(), bi.begin(), bi.end());

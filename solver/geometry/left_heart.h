@@ -61,6 +61,10 @@ struct HeartLayout {
   double cusp_coaptation_height_mm = 0;    // height of the closed aortic cusp tips
   double leaflet_gap_mm = 0;               // gap between neighbouring leaflets at closure
   double ring_edge_mm = 0;                 // node spacing on the plane and the orifice rings
+  double aortic_commissure_height_mm = 0;  // crown: commissures above the plane (0: flat cusps)
+  double aortic_crown_height_mm = 0;       // anchors tagged aortic_annulus lie up to this height
+                                           // above the plane (the cusps' crown-shaped attachment
+                                           // and the root wall held below it); 0: flat cusps
   Vec3 box_clearance_mm = Vec3::Zero();    // smallest distance to the box walls (x, y, z)
 };
 

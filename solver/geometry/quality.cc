@@ -261,7 +261,10 @@ std::vector<QualityIssue> check_body(const TriMesh& mesh, const CheckOptions& o)
     if (r & kAnchor) {
       ++anchors;
       const double d = std::abs(mesh.position_mm[i].z() - o.plane_z_mm);
-      if (d > o.plane_tolerance_mm)
+      const double above = o.plane_z_mm - mesh.position_mm[i].z();
+      const bool on_crown = (r & kAorticAnnulus) && above >= -o.plane_tolerance_mm &&
+                            above <= o.aortic_crown_height_mm + o.plane_tolerance_mm;
+      if (d > o.plane_tolerance_mm && !on_crown)
         off_plane.add("anchor node " + std::to_string(i) + " at " + at(mesh.position_mm[i]) + " is " +
                       std::to_string(d) + " mm off the valvular plane");
     }

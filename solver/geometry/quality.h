@@ -20,6 +20,9 @@ struct QualityIssue {
 struct CheckOptions {
   double plane_z_mm = 0;        // the valvular plane (anchors and chamber openings lie in it)
   double plane_tolerance_mm = 1e-6;
+  // Anchors tagged aortic_annulus may also lie up to this height above the plane (towards -z):
+  // the crown-shaped attachment of the aortic cusps and the root wall below it (ours).
+  double aortic_crown_height_mm = 0;
   double degenerate_min_angle_deg = 0.5;  // below this a triangle counts as degenerate
 };
 

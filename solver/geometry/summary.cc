@@ -61,6 +61,8 @@ nlohmann::json heart_summary(const LeftHeart& heart, const MarkerPlan& plan) {
                  {"cusp_coaptation_height_mm", l.cusp_coaptation_height_mm},
                  {"leaflet_gap_mm", l.leaflet_gap_mm},
                  {"ring_edge_mm", l.ring_edge_mm},
+                 {"aortic_commissure_height_mm", l.aortic_commissure_height_mm},
+                 {"aortic_crown_height_mm", l.aortic_crown_height_mm},
                  {"box_clearance_mm", vec(l.box_clearance_mm)}};
   j["marker_spacing_target_mm"] = plan.target_mm;
   std::size_t nodes = 0, tris = 0, marker_nodes = 0, marker_tris = 0;

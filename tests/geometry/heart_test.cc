@@ -44,6 +44,7 @@ TEST_P(HeartAtResolution, VolumesBoxOrientationAndChecks) {
   o.plane_z_mm = zp;
   o.plane_tolerance_mm = 1e-9 * zp;
   o.degenerate_min_angle_deg = 0.1;
+  o.aortic_crown_height_mm = heart.layout.aortic_crown_height_mm;
   for (const auto& b : heart.bodies) {
     const auto issues = check_body(b, o);
     EXPECT_TRUE(issues.empty()) << b.name << ": " << (issues.empty() ? "" : issues[0].message);
@@ -127,16 +128,27 @@ TEST(Heart, NamedRegionsArePresentOnTheRightBodies) {
   EXPECT_GT(count(kLvBody, kLvApexRing), 5u);
   EXPECT_GT(count(kLvBody, kLvBaseRing), 20u);
   EXPECT_GT(count(kAortaBody, kOutflow), 20u);
-  // Every deformable body is anchored; anchors lie in the plane.
+  // Every deformable body is anchored; anchors lie in the plane, except on the aortic crown:
+  // the cusps' attachment and the root wall held below it, tagged aortic_annulus, up to the
+  // crown's height above the plane.
+  ASSERT_GT(heart.layout.aortic_commissure_height_mm, 0);
   for (const auto& b : heart.bodies) {
     if (b.kind == BodyKind::kRigid) continue;
-    std::size_t anchors = 0;
+    std::size_t anchors = 0, on_crown = 0;
     for (std::size_t i = 0; i < b.node_count(); ++i)
       if (b.region[i] & kAnchor) {
         ++anchors;
-        EXPECT_NEAR(b.position_mm[i].z(), heart.plane.z_mm, 1e-9);
+        const double above = heart.plane.z_mm - b.position_mm[i].z();
+        if (std::abs(above) <= 1e-9) continue;
+        ++on_crown;
+        EXPECT_TRUE(b.region[i] & kAorticAnnulus) << b.name << " node " << i;
+        EXPECT_GT(above, 0) << b.name;
+        EXPECT_LE(above, heart.layout.aortic_crown_height_mm + 1e-9) << b.name;
       }
     EXPECT_GT(anchors, 5u) << b.name;
+    const bool crown_body = b.name == kAortaBody || b.name.rfind("aortic_cusp_", 0) == 0;
+    if (crown_body) EXPECT_GT(on_crown, 5u) << b.name;
+    else EXPECT_EQ(on_crown, 0u) << b.name;
   }
   // The ostia are on the posterior wall (-x of the mitral centre) and cover about pi r^2 each.
   const TriMesh& la = heart.body(kLaBody);
@@ -323,13 +335,55 @@ TEST(Heart, PassiveAndAtrialFibres) {
     }
     EXPECT_GT(sum / m.triangle_count(), 0.8) << name;
   }
-  for (auto name : kAorticCuspBodies) {
-    const TriMesh& m = heart.body(name);
+  // Crown cusps: fibres from commissure to commissure, i.e. across the cusp's own radius in its
+  // middle (azimuth within 20 degrees of the cusp's centre), and climbing towards the
+  // commissures along the attachment's upper arms (on triangles with a node on the crown above
+  // half the commissure height).
+  for (int k = 0; k < 3; ++k) {
+    const TriMesh& m = heart.body(kAorticCuspBodies[k]);
+    const double phi = 2 * M_PI * k / 3;
+    const Vec3 radial(std::cos(phi), std::sin(phi), 0);
+    std::size_t middle = 0, arms = 0;
     for (std::size_t t = 0; t < m.triangle_count(); ++t) {
       const Vec3 r = m.centroid(t) - heart.plane.aortic_centre_mm;
-      EXPECT_LT(std::abs(m.fibre[t].dot(Vec3(r.x(), r.y(), 0).normalized())), 0.5) << name;
+      const double az = std::remainder(std::atan2(r.y(), r.x()) - phi, 2 * M_PI);
+      if (std::abs(az) < 20 * M_PI / 180 && r.head<2>().norm() > 2) {
+        ++middle;
+        EXPECT_LT(std::abs(m.fibre[t].dot(radial)), 0.5) << m.name << " triangle " << t;
+      }
+      bool high_arm = false;
+      for (auto v : m.tri[t])
+        high_arm = high_arm || ((m.region[v] & kAnchor) &&
+                                heart.plane.z_mm - m.position_mm[v].z() > 0.5 * heart.layout.aortic_commissure_height_mm);
+      if (high_arm) {
+        ++arms;
+        EXPECT_GT(std::abs(m.fibre[t].z()), 0.3) << m.name << " triangle " << t;
+      }
     }
+    EXPECT_GT(middle, 5u);
+    EXPECT_GT(arms, 5u);
   }
+}
+
+// The crown's height is checked against the cusps' tips and the root: too low is refused naming
+// the field and the minimum; 0 gives the flat-annulus cusps (every anchor in the plane).
+TEST(Heart, CommissureHeightIsCheckedAndZeroGivesTheFlatCusps) {
+  auto s = defaults();
+  s.geometry.aortic_commissure_height_per_radius = 0.55;
+  try {
+    build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("geometry.aortic_commissure_height_per_radius = 0.55"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("at least 0.6"), std::string::npos) << e.what();
+  }
+  s.geometry.aortic_commissure_height_per_radius = 0;
+  const LeftHeart flat = build(s);
+  EXPECT_EQ(flat.layout.aortic_crown_height_mm, 0);
+  for (const auto& b : flat.bodies)
+    for (std::size_t i = 0; i < b.node_count(); ++i)
+      if (b.region[i] & kAnchor) EXPECT_NEAR(b.position_mm[i].z(), flat.plane.z_mm, 1e-9) << b.name;
 }
 
 TEST(Heart, BoxTooSmallIsRejectedNamingTheBox) {

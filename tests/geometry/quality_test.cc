@@ -26,6 +26,7 @@ CheckOptions options() {
   o.plane_z_mm = heart().plane.z_mm;
   o.plane_tolerance_mm = 1e-9 * o.plane_z_mm;
   o.degenerate_min_angle_deg = 0.1;
+  o.aortic_crown_height_mm = heart().layout.aortic_crown_height_mm;
   return o;
 }
 

@@ -47,6 +47,8 @@ TEST(Tiling, KeepsAreaVolumeAndAttributes) {
     CheckOptions o;
     o.plane_z_mm = heart.plane.z_mm;
     o.plane_tolerance_mm = 1e-9 * heart.plane.z_mm;
+  o.aortic_crown_height_mm = heart.layout.aortic_crown_height_mm;
+    o.aortic_crown_height_mm = heart.layout.aortic_crown_height_mm;
     o.degenerate_min_angle_deg = 0.1;
     const auto issues = check_body(t, o);
     EXPECT_TRUE(issues.empty()) << issues.front().message;
@@ -100,6 +102,7 @@ TEST(Tiling, MarkerHeartAtGridOneIsCleanAndDisjoint) {
   CheckOptions o;
   o.plane_z_mm = heart.plane.z_mm;
   o.plane_tolerance_mm = 1e-9 * heart.plane.z_mm;
+  o.aortic_crown_height_mm = heart.layout.aortic_crown_height_mm;
   o.degenerate_min_angle_deg = 0.1;
   std::size_t triangles = 0;
   for (const auto* t : ptrs) {

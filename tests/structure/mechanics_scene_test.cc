@@ -56,7 +56,10 @@ TEST(MechanicsScene, SphereInflatesAndWritesPositions) {
 // limiter (1 mm towards the LA): they touch, nothing crosses, the limiter holds.
 TEST(MechanicsScene, MitralLeafletsCoaptWithContactAndLimiter) {
   Control control({});
+  // The seed's leaflet c in pascals, soft enough for 0.3 mmHg to close them (the default reads
+  // it in units of rho U^2, docs/fsei.md): the test is about contact and the limiter.
   const auto s = config::parse_scenario({{"scene", "mechanics"},
+                                         {"tissue", {{"mitral_leaflets", {{"fung_c_pa", 9.7}}}}},
                                          {"structure",
                                           {{"body", "mitral_leaflets"}, {"cavity_pressure_mmhg", 0.3},
                                            {"pressure_ramp_ms", 5}, {"end_time_ms", 30}, {"output_interval_ms", 2},

@@ -32,8 +32,9 @@ TEST(Config, DefaultsAreTheSeedsHealthyHeart) {
   EXPECT_DOUBLE_EQ(s.av_delay_ms, 100);
   EXPECT_DOUBLE_EQ(s.tissue.lv.fung_c_pa, 13.3);
   EXPECT_DOUBLE_EQ(s.tissue.aorta.fung_c_pa, 11.3);
-  EXPECT_DOUBLE_EQ(s.tissue.mitral_leaflets.fung_c_pa, 9.7);
-  EXPECT_DOUBLE_EQ(s.tissue.aortic_leaflets.fung_c_pa, 9.7);
+  // the leaflets' c: the seed's 9.7 in units of rho U^2 (ours, docs/fsei.md)
+  EXPECT_DOUBLE_EQ(s.tissue.mitral_leaflets.fung_c_pa, 3702);
+  EXPECT_DOUBLE_EQ(s.tissue.aortic_leaflets.fung_c_pa, 3702);
   EXPECT_DOUBLE_EQ(s.tissue.la.fung_c_pa, 12.1);
   EXPECT_DOUBLE_EQ(s.tissue.lv.alpha_f, 49.56);
   EXPECT_DOUBLE_EQ(s.tissue.lv.alpha_c, 5.29);
