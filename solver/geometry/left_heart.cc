@@ -33,7 +33,7 @@ constexpr double kPatchRadiusMm = 5.0;    // Bachmann and His stimulus patches
 constexpr double kOutflowLengthPerDiameter = 1.5;
 constexpr double kDescendingTaperPerDiameter = 2.0;
 constexpr double kCrownInsetPerEdge = 0.15;  // cusp attachment inside the root's faces
-constexpr int kLeafletSmoothingPasses = 10;  // mitral leaflets: 3D Laplacian passes
+constexpr double kMitralCoaptationPerLength = 0.35;  // closed mitral: coaptation strip / leaflet
 constexpr double kPlaneBandMm = 3.0;      // clearance is not measured this close to the plane
 
 void require(bool ok, const std::string& message) {
@@ -139,7 +139,7 @@ struct GraphBoundary {
 };
 TriMesh graph_surface(std::string_view name, const std::vector<GraphBoundary>& boundary,
                       const std::vector<Vec2>& interior, const std::function<double(const Vec2&)>& height,
-                      Tissue tissue, double thickness, int smoothing_passes = 0) {
+                      Tissue tissue, double thickness) {
   TriMesh mesh;
   mesh.name = std::string(name);
   mesh.kind = BodyKind::kLeaflet;
@@ -152,98 +152,26 @@ TriMesh graph_surface(std::string_view name, const std::vector<GraphBoundary>& b
     mesh.add_node(Vec3(p.x(), p.y(), height(p)));
     pts.push_back(p);
   }
-  const auto tris = detail::delaunay_2d(pts);
-  for (const auto& t : tris) mesh.add_triangle(t[0], t[2], t[1], tissue, thickness);
-  // Laplacian smoothing of the interior nodes in 3D, projected back on the height field (ours):
-  // the plan lattice is uniform but the surface is steep near the free edges, where plain plan
-  // Delaunay leaves triangles of 9-10 degrees that bending then collapses under load
-  // (docs/fsei.md). A pass that would turn a triangle over in plan is not applied.
-  if (smoothing_passes > 0) {
-    const std::size_t nb = boundary.size(), nn = mesh.node_count();
-    std::vector<std::vector<std::int32_t>> nbr(nn);
-    for (const auto& t : tris)
-      for (int a = 0; a < 3; ++a) {
-        nbr[t[a]].push_back(t[(a + 1) % 3]);
-        nbr[t[a]].push_back(t[(a + 2) % 3]);
-      }
-    auto plan_area = [&](const std::vector<Vec3>& x, const Tri& t) {
-      const Vec2 a = x[t[0]].head<2>(), b = x[t[1]].head<2>(), c = x[t[2]].head<2>();
-      return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-    };
-    for (int pass = 0; pass < smoothing_passes; ++pass) {
-      std::vector<Vec3> next = mesh.position_mm;
-      for (std::size_t i = nb; i < nn; ++i) {
-        Vec3 m = Vec3::Zero();
-        for (auto j : nbr[i]) m += mesh.position_mm[j];
-        m /= static_cast<double>(nbr[i].size());
-        // the point of the height field closest to m (Gauss-Newton from the node's own (x, y))
-        Vec2 u = mesh.position_mm[i].head<2>();
-        for (int it = 0; it < 4; ++it) {
-          const double e = 1e-4, z = height(u);
-          const Vec2 grad((height(u + Vec2(e, 0)) - height(u - Vec2(e, 0))) / (2 * e),
-                          (height(u + Vec2(0, e)) - height(u - Vec2(0, e))) / (2 * e));
-          const Vec3 r = m - Vec3(u.x(), u.y(), z);
-          Eigen::Matrix2d jtj = Eigen::Matrix2d::Identity() + grad * grad.transpose();
-          const Vec2 jtr = r.head<2>() + grad * r.z();
-          u += jtj.ldlt().solve(jtr);
-        }
-        next[i] = Vec3(u.x(), u.y(), height(u));
-      }
-      bool ok = true;
-      for (const auto& t : tris) ok = ok && plan_area(next, t) > 0;
-      if (!ok) break;
-      mesh.position_mm = std::move(next);
-    }
-  }
+  for (const auto& t : detail::delaunay_2d(pts)) mesh.add_triangle(t[0], t[2], t[1], tissue, thickness);
   return mesh;
 }
 
-// ---- the crown-shaped aortic valve (geometry.aortic_commissure_height_per_radius > 0), ours -----------
-// Cusp k of the closed valve, centred on the azimuth phi_k = 120 k degrees about the root axis
-// through A (up = -z). It is the surface swept by the quadratic Bezier curves, for s in [-1, 1],
-//   B(s, t) = (1 - t)^2 W(s) + 2 t (1 - t) Q(s) + t^2 F(s),   t in [0, 1] from wall to free edge:
-// - W(s), the attachment, on the root wall at azimuth phi_k + s (60 deg - delta), height H s^2
-//   (a U from the commissure tops at height H down to the nadir on the orifice ring);
-// - F(s), the free edge, straight from the tip T (half_gap / sin 60 deg from the axis towards
-//   phi_k, height h_tip) to the commissure top W(+-1); delta sets W(+-1) half_gap from the
-//   commissure's radius so that neighbouring cusps stay 2 half_gap apart;
-// - Q(s) = F(s) - c (1 - |s|) up with c = h_tip: the curves leave the wall towards the axis and
-//   end vertically, so that near the free edges neighbouring cusps face each other across
-//   vertical coaptation strips, pressed together by the aortic pressure.
-// Fibres along dB/ds: every fibre runs from one commissure to the other, and the fibres near
-// the wall end on the anchored attachment, so the seed's fibre-stiff tissue carries the load
-// (docs/fsei.md: the flat-annulus cusps' fibres end on free edges, their cross-fibre law cannot).
-// Meshed by Delaunay in a lens-shaped parameter plane (X, Y) = (s Ls, t Lt (1 - s^2)), Ls and
-// Lt the half length of the attachment and the length of the middle curve, then mapped.
-struct CrownCusps {
-  Vec3 centre;                 // the aortic orifice centre, in the valvular plane
-  double r_a, H, h_tip, half_gap, h_mesh, thickness;
-  double inset;  // the attachment's distance inside the root's analytic wall
-  std::function<double(double, double)> wall_radius;  // (height above the plane, azimuth) -> mm
+// ---- closed leaflets as "lenses" (ours) ---------------------------------------------------
+// A closed leaflet between an anchored attachment W(s) and a free edge F(s), s in [-1, 1] from
+// one commissure to the other, W(+-1) = F(+-1) (the commissures): the surface swept by the
+// quadratic Bezier curves
+//   B(s, t) = (1 - t)^2 W(s) + 2 t (1 - t) Q(s) + t^2 F(s),   t in [0, 1] from W to F,
+// with a control point Q(s) set by the valve. Fibres along dB/ds: every fibre runs from one
+// commissure to the other, and those near the attachment end on it. Meshed by Delaunay in a
+// lens-shaped plane (arclength along the attachment, t times the length of the curve at s,
+// capped by its concave envelope), then mapped: lengths in the plane are close to 3D lengths.
+struct LensLeaflet {
+  std::function<Vec3(double)> wall, free_edge, control;  // W(s), Q(s), F(s)
+  double h_mesh;
 
-  Vec3 up() const { return -Vec3::UnitZ(); }
-  Vec3 wall_point(int k, double s) const {
-    const double phi = 2 * M_PI * k / 3;
-    const double th = phi + s * (M_PI / 3 - commissure_offset_rad()), z = H * s * s;
-    return centre + (wall_radius(z, th) - inset) * Vec3(std::cos(th), std::sin(th), 0) + z * up();
+  Vec3 point(double s, double t) const {
+    return (1 - t) * (1 - t) * wall(s) + 2 * t * (1 - t) * control(s) + t * t * free_edge(s);
   }
-  // The attachment's commissure ends sit this far (in azimuth) inside the cusp's 120 degrees.
-  double commissure_offset_rad() const {
-    return std::asin(std::min(1.0, half_gap / (wall_radius(H, M_PI / 3) - inset)));
-  }
-  Vec3 tip(int k) const {
-    const double phi = 2 * M_PI * k / 3;
-    return centre + half_gap / std::sin(M_PI / 3) * Vec3(std::cos(phi), std::sin(phi), 0) + h_tip * up();
-  }
-  Vec3 free_edge(int k, double s) const {
-    return tip(k) + std::abs(s) * (wall_point(k, s < 0 ? -1.0 : 1.0) - tip(k));
-  }
-  Vec3 point(int k, double s, double t) const {
-    const Vec3 w = wall_point(k, s), f = free_edge(k, s);
-    const Vec3 q = f - h_tip * (1 - std::abs(s)) * up();
-    return (1 - t) * (1 - t) * w + 2 * t * (1 - t) * q + t * t * f;
-  }
-  // Length of the curve s -> point(k, s, t) over [s0, s1] or t -> point(k, s, t) over [t0, t1].
   template <class F>
   static double length(const F& curve, double a, double b) {
     double len = 0;
@@ -255,69 +183,152 @@ struct CrownCusps {
     }
     return len;
   }
+  // Values of s in [a, b] equally spaced in 3D along curve(s), ends included, >= min_segments.
+  template <class F>
+  std::vector<double> stations(const F& curve, double a, double b, int min_segments) const {
+    const int dense = 2000;
+    std::vector<double> param(dense + 1), arc(dense + 1, 0.0);
+    for (int i = 0; i <= dense; ++i) {
+      param[i] = a + (b - a) * i / dense;
+      if (i) arc[i] = arc[i - 1] + (curve(param[i]) - curve(param[i - 1])).norm();
+    }
+    const int n = std::max(min_segments, static_cast<int>(std::ceil(arc.back() / h_mesh)));
+    return detail::equal_arclength_stations(param, arc, n);
+  }
 
-  TriMesh build(int k, std::string_view name) const {
+  // attachment: (s, position) of the attachment nodes from s = -1 to 1 (ends included), or
+  // empty to sample W by equal arclength. Normals face `plus_side` at the belly (t = 0.3, s = 0).
+  TriMesh build(std::string_view name, Tissue tissue, double thickness, std::uint32_t attachment_tags,
+                std::vector<std::pair<double, Vec3>> attachment, const Vec3& plus_side) const {
     TriMesh mesh;
     mesh.name = std::string(name);
     mesh.kind = BodyKind::kLeaflet;
-    const double Ls = 0.5 * length([&](double s) { return wall_point(k, s); }, -1, 1);
-    const double Lt = length([&](double t) { return point(k, 0, t); }, 0, 1);
+    // The lens plane: X = arclength along the attachment (centred), Y = t times the length of the
+    // curve s -> B(s, .) capped above by its concave envelope over X (so the lens is convex and
+    // Delaunay covers exactly it); X <-> s tabulated.
+    const int n_tab = 400;
+    std::vector<double> tab_s(n_tab + 1), tab_x(n_tab + 1, 0.0), tab_len(n_tab + 1);
+    for (int i = 0; i <= n_tab; ++i) {
+      tab_s[i] = -1 + 2.0 * i / n_tab;
+      if (i) tab_x[i] = tab_x[i - 1] + (wall(tab_s[i]) - wall(tab_s[i - 1])).norm();
+      tab_len[i] = (i == 0 || i == n_tab) ? 0.0 : length([&](double t) -> Vec3 { return point(tab_s[i], t); }, 0, 1);
+    }
+    const double Ls = 0.5 * tab_x.back();
+    for (double& x : tab_x) x -= Ls;
+    std::vector<int> hull;  // upper hull of (x, len): the concave envelope
+    for (int i = 0; i <= n_tab; ++i) {
+      while (hull.size() >= 2) {
+        const int a = hull[hull.size() - 2], b = hull.back();
+        const double cross = (tab_x[b] - tab_x[a]) * (tab_len[i] - tab_len[a]) - (tab_len[b] - tab_len[a]) * (tab_x[i] - tab_x[a]);
+        if (cross >= 0) hull.pop_back();
+        else break;
+      }
+      hull.push_back(i);
+    }
+    auto interp = [](const std::vector<double>& xs, const std::vector<double>& ys, double x) {
+      const auto it = std::upper_bound(xs.begin(), xs.end(), x);
+      const std::size_t k = std::clamp<std::size_t>(static_cast<std::size_t>(it - xs.begin()), 1, xs.size() - 1);
+      const double w = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+      return ys[k - 1] + std::clamp(w, 0.0, 1.0) * (ys[k] - ys[k - 1]);
+    };
+    std::vector<double> hull_x, hull_len;
+    for (int i : hull) hull_x.push_back(tab_x[i]), hull_len.push_back(tab_len[i]);
+    auto top = [&](double x) { return interp(hull_x, hull_len, x); };
+    auto x_of_s = [&](double s) { return interp(tab_s, tab_x, s); };
+    auto s_of_x = [&](double x) { return interp(tab_x, tab_s, x); };
     std::vector<Vec2> uv;  // (s, t) of each node
     std::vector<Vec2> xy;  // its lens-plane position
-    auto lens = [&](double s, double t) { return Vec2(s * Ls, t * Lt * (1 - s * s)); };
-    auto add = [&](double s, double t, std::uint32_t tags) {
-      mesh.add_node(point(k, s, t), tags);
+    auto add = [&](double s, double t, const Vec3& p, std::uint32_t tags) {
+      mesh.add_node(p, tags);
       uv.emplace_back(s, t);
-      xy.push_back(lens(s, t));
+      const double x = x_of_s(s);
+      xy.emplace_back(x, t * top(x));
     };
-    // Attachment, equal arclength in 3D, commissures included (anchors: held like the annulus).
-    {
-      const int dense = 2000;
-      std::vector<double> param(dense + 1), arc(dense + 1, 0.0);
-      for (int i = 0; i <= dense; ++i) {
-        param[i] = -1 + 2.0 * i / dense;
-        if (i) arc[i] = arc[i - 1] + (wall_point(k, param[i]) - wall_point(k, param[i - 1])).norm();
-      }
-      const int n = std::max(6, static_cast<int>(std::ceil(arc.back() / h_mesh)));
-      for (double s : detail::equal_arclength_stations(param, arc, n)) add(s, 0, kAnchor | kAorticAnnulus);
-    }
-    // Free edge: two straight halves, commissures excluded (already added), tip included.
-    const int nf = std::max(3, static_cast<int>(std::ceil((wall_point(k, 1) - tip(k)).norm() / h_mesh)));
-    for (int j = nf - 1; j >= 1; --j) add(-static_cast<double>(j) / nf, 1, kFreeEdge);
-    add(0, 1, kFreeEdge);
-    for (int j = 1; j < nf; ++j) add(static_cast<double>(j) / nf, 1, kFreeEdge);
+    if (attachment.empty())
+      for (double s : stations(wall, -1, 1, 6)) attachment.emplace_back(s, wall(s));
+    for (const auto& [s, p] : attachment) add(s, 0, p, attachment_tags);
+    // Free edge: each half equally spaced in 3D, the commissures excluded (attachment nodes).
+    const auto left = stations(free_edge, -1, 0, 3), right = stations(free_edge, 0, 1, 3);
+    for (std::size_t j = 1; j < left.size(); ++j) add(left[j], 1, free_edge(left[j]), kFreeEdge);
+    for (std::size_t j = 1; j + 1 < right.size(); ++j) add(right[j], 1, free_edge(right[j]), kFreeEdge);
     const std::size_t n_boundary = xy.size();
     // Interior: a hexagonal lattice of the lens plane, kept 0.6 h away from its boundary.
     const double margin = 0.6 * h_mesh;
-    for (const Vec2& p : detail::hex_lattice(Vec2(-Ls, 0), Vec2(Ls, Lt), h_mesh)) {
-      const double s = p.x() / Ls;
-      if (std::abs(s) >= 1) continue;
-      const double top = Lt * (1 - s * s);
-      if (p.y() < margin || p.y() > top - margin) continue;
+    const double height = *std::max_element(hull_len.begin(), hull_len.end());
+    for (const Vec2& p : detail::hex_lattice(Vec2(-Ls, 0), Vec2(Ls, height), h_mesh)) {
+      if (std::abs(p.x()) >= Ls) continue;
+      const double y_top = top(p.x());
+      if (p.y() < margin || p.y() > y_top - margin) continue;
       double d = 1e300;
       for (std::size_t i = 0; i < n_boundary; ++i) d = std::min(d, (p - xy[i]).norm());
       if (d < margin) continue;
-      add(s, p.y() / top, kRegionNone);
+      const double s = s_of_x(p.x()), t = p.y() / y_top;
+      mesh.add_node(point(s, t), kRegionNone);
+      uv.emplace_back(s, t);
+      xy.push_back(p);
     }
-    // The lens is convex (under a parabola), so Delaunay covers exactly it.
-    for (const auto& t : detail::delaunay_2d(xy)) mesh.add_triangle(t[0], t[1], t[2], Tissue::kAorticLeaflet, thickness);
-    // Orientation: normals face the aortic side (the sinus, above the belly), as the flat cusps'
-    // face -z: the triangle nearest the belly's middle must face up.
+    for (const auto& t : detail::delaunay_2d(xy)) mesh.add_triangle(t[0], t[1], t[2], tissue, thickness);
     {
-      const Vec3 belly = point(k, 0, 0.3);
+      const Vec3 belly = point(0, 0.3);
       std::size_t best = 0;
       for (std::size_t tr = 1; tr < mesh.triangle_count(); ++tr)
         if ((mesh.centroid(tr) - belly).squaredNorm() < (mesh.centroid(best) - belly).squaredNorm()) best = tr;
-      if (mesh.unit_normal(best).dot(up()) < 0) mesh.flip_orientation();
+      if (mesh.unit_normal(best).dot(plus_side) < 0) mesh.flip_orientation();
     }
     for (std::size_t tr = 0; tr < mesh.triangle_count(); ++tr) {
       const auto& v = mesh.tri[tr];
       const Vec2 c = (uv[v[0]] + uv[v[1]] + uv[v[2]]) / 3.0;
       const double e = 1e-3;
-      const Vec3 along = point(k, std::min(1.0, c.x() + e), c.y()) - point(k, std::max(-1.0, c.x() - e), c.y());
+      const Vec3 along = point(std::min(1.0, c.x() + e), c.y()) - point(std::max(-1.0, c.x() - e), c.y());
       mesh.fibre[tr] = tangent_in_triangle(mesh, tr, along, Vec3::UnitX());
     }
     return mesh;
+  }
+};
+
+// ---- the crown-shaped aortic valve (geometry.aortic_commissure_height_per_radius > 0), ours -----------
+// Cusp k of the closed valve, centred on the azimuth phi_k = 120 k degrees about the root axis
+// through A (up = -z), is a LensLeaflet:
+// - W(s), the attachment, on the root wall at azimuth phi_k + s (60 deg - delta), height H s^2
+//   (a U from the commissure tops at height H down to the nadir on the orifice ring), `inset`
+//   inside the root's analytic wall;
+// - F(s), the free edge, straight from the tip T (half_gap / sin 60 deg from the axis towards
+//   phi_k, height h_tip) to the commissure top W(+-1); delta sets W(+-1) half_gap from the
+//   commissure's radius so that neighbouring cusps stay 2 half_gap apart;
+// - Q(s) = F(s) - h_tip (1 - |s|) up: the curves leave the wall towards the axis and end
+//   vertically, so that near the free edges neighbouring cusps face each other across vertical
+//   coaptation strips, pressed together by the aortic pressure.
+// Every fibre runs from one commissure to the other and the fibres near the wall end on the
+// anchored attachment, so the fibre-stiff tissue carries the load (docs/fsei.md: the
+// flat-annulus cusps' fibres end on free edges, and their cross-fibre law cannot).
+struct CrownCusps {
+  Vec3 centre;                 // the aortic orifice centre, in the valvular plane
+  double r_a, H, h_tip, half_gap, h_mesh, thickness;
+  double inset;  // the attachment's distance inside the root's analytic wall
+  std::function<double(double, double)> wall_radius;  // (height above the plane, azimuth) -> mm
+
+  Vec3 up() const { return -Vec3::UnitZ(); }
+  // The attachment's commissure ends sit this far (in azimuth) inside the cusp's 120 degrees.
+  double commissure_offset_rad() const {
+    return std::asin(std::min(1.0, half_gap / (wall_radius(H, M_PI / 3) - inset)));
+  }
+  Vec3 wall_point(int k, double s) const {
+    const double phi = 2 * M_PI * k / 3;
+    const double th = phi + s * (M_PI / 3 - commissure_offset_rad()), z = H * s * s;
+    return centre + (wall_radius(z, th) - inset) * Vec3(std::cos(th), std::sin(th), 0) + z * up();
+  }
+  Vec3 tip(int k) const {
+    const double phi = 2 * M_PI * k / 3;
+    return centre + half_gap / std::sin(M_PI / 3) * Vec3(std::cos(phi), std::sin(phi), 0) + h_tip * up();
+  }
+  LensLeaflet lens(int k) const {
+    auto w = [this, k](double s) -> Vec3 { return wall_point(k, s); };
+    auto f = [this, k](double s) -> Vec3 { return tip(k) + std::abs(s) * (wall_point(k, s < 0 ? -1.0 : 1.0) - tip(k)); };
+    auto q = [this, f](double s) -> Vec3 { return f(s) - h_tip * (1 - std::abs(s)) * up(); };
+    return LensLeaflet{w, f, q, h_mesh};
+  }
+  TriMesh build(int k, std::string_view name) const {
+    return lens(k).build(name, Tissue::kAorticLeaflet, thickness, kAnchor | kAorticAnnulus, {}, up());
   }
 };
 
@@ -584,63 +595,62 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   tag_patch(la, la_point(0.75 * (y_c + c_la), 0.0), kPatchRadiusMm, kBachmannBundle);
 
   // ---- mitral leaflets (closed) -----------------------------------------------------------
-  // Each leaflet is a height field over half of the orifice: the annulus arc (ring nodes) at
-  // the plane, the free edge a straight coaptation line parallel to y at x = +-g/2 (g =
-  // valve_gap_mm; 0: one ring edge, the free edges ending on ring nodes), dipping to depth z_c (parabolic profile, shallow at the commissures) so that
-  // the leaflet's mid-section from annulus to free edge is a straight segment of length
-  // mitral_leaflet_length_mm. For g > 0 the free edges end on the ring's chords across the
-  // commissures (extra annulus nodes). Ours: the contact model does not close a gap of one ring
-  // edge (2 mm) by itself; a gap below the fluid spacing is an option (docs/fsei.md).
-  const double x_ring = r_m * std::sin(M_PI / n_m), w_half = r_m * std::cos(M_PI / n_m);
+  // Each leaflet is a LensLeaflet (ours) over its half of the orifice: the attachment W(s) is
+  // the annulus arc (the ring's nodes, in the plane), the free edge F(s) a coaptation line
+  // parallel to y at x = x_m +- g/2 (g = valve_gap_mm; 0: one ring edge, the free edges ending
+  // on the ring's nodes at the commissures; else on the circle), s = y / y_end. The curves from
+  // W(s) head for Q(s), depth z_q (1 - s^2) under the coaptation line, and end vertically at F(s),
+  // l_c = 0.35 l (1 - s^2) deeper: the leaflets meet across vertical coaptation strips that the
+  // LV's pressure presses together, and z_q is solved so that the middle curve is
+  // mitral_leaflet_length_mm = l long. Fibres from commissure to commissure (along y).
+  const double x_ring = r_m * std::sin(M_PI / n_m);
   require(g.valve_gap_mm < 2 * x_ring,
           "geometry.valve_gap_mm = " + num(g.valve_gap_mm) + " must be shorter than the mitral ring edge (" +
               num(2 * x_ring) + " mm at target_edge_mm = " + num(g.target_edge_mm) + "); 0 gives one ring edge");
   const bool ring_gap = g.valve_gap_mm == 0;  // the free edges end on the ring's nodes
   const double x_f = ring_gap ? x_ring : 0.5 * g.valve_gap_mm;
-  require(g.mitral_leaflet_length_mm > r_m - x_f + 0.5,
-          "geometry.mitral_leaflet_length_mm = " + num(g.mitral_leaflet_length_mm) +
-              " is too short to close the mitral orifice: it must exceed mitral_diameter_mm / 2 = " + num(r_m));
-  const double z_c = std::sqrt(std::pow(g.mitral_leaflet_length_mm, 2) - std::pow(r_m - x_f, 2));
+  const double y_end = std::sqrt(r_m * r_m - x_f * x_f);
+  const double l_leaf = g.mitral_leaflet_length_mm, l_c = kMitralCoaptationPerLength * l_leaf;
+  auto mitral_lens = [&](double sgn, double z_q) {
+    auto w = [=](double s) -> Vec3 {
+      const double y = s * y_end;
+      return M + Vec3(sgn * std::sqrt(std::max(0.0, r_m * r_m - y * y)), y, 0);
+    };
+    auto f = [=](double s) -> Vec3 { return M + Vec3(sgn * x_f, s * y_end, (z_q + l_c) * (1 - s * s)); };
+    auto q = [=](double s) -> Vec3 { return M + Vec3(sgn * x_f, s * y_end, z_q * (1 - s * s)); };
+    return LensLeaflet{w, f, q, h_ring};
+  };
+  auto middle_length = [&](double z_q) {
+    const LensLeaflet lens = mitral_lens(1, z_q);
+    return LensLeaflet::length([&](double t) -> Vec3 { return lens.point(0, t); }, 0, 1);
+  };
+  require(middle_length(0) < l_leaf,
+          "geometry.mitral_leaflet_length_mm = " + num(l_leaf) + " is too short to close the mitral orifice: it must "
+          "exceed " + num(middle_length(0)) + " mm (the span from the annulus to the coaptation line, mitral_diameter_mm / 2 = " +
+              num(r_m) + " mm, plus the coaptation strip)");
+  const double z_q = solve_increasing(middle_length, l_leaf, 0, 4 * l_leaf);
+  const double z_c = z_q + l_c;
   lay.mitral_coaptation_depth_mm = z_c;
   lay.leaflet_gap_mm = 2 * x_f;
-  const double h_leaf = h_ring * std::max(0.6, (r_m - x_f) / g.mitral_leaflet_length_mm);
   for (int side = 0; side < 2; ++side) {
     const double sgn = side == 0 ? 1.0 : -1.0;  // anterior (+x, towards the aortic valve) / posterior
-    std::vector<GraphBoundary> boundary;
-    for (std::size_t i = 0; i < mitral_ring.node.size(); ++i)
-      if (sgn * std::cos(mitral_ring.angle[i]) > 0)
-        boundary.push_back({plane.position_mm[mitral_ring.node[i]], kAnchor | kMitralAnnulus});
-    // the free edge's ends, on the commissure chords (y = +-w_half) of the ring
-    if (!ring_gap)
-      for (double y : {-w_half, w_half}) boundary.push_back({Vec3(x_m + sgn * x_f, y, 0), kAnchor | kMitralAnnulus});
-    auto z_free = [&](double s) { return z_c * std::max(0.0, 1 - s * s); };
-    // Free-edge nodes equally spaced along the 3D edge (it is steep near the commissures), at
-    // the ring spacing, which is about the interior's 3D spacing (h_leaf is its plan spacing).
-    const auto fe = meridian_stations([&](double s) { return Vec2(s * w_half, z_free(s)); }, 1, -1, h_ring, 2);
-    for (std::size_t j = 1; j + 1 < fe.size(); ++j) {
-      const double s = fe[j];
-      const double bulge = 1e-4 * w_half * (1 - s * s);  // keeps the domain strictly convex
-      boundary.push_back({Vec3(x_m + sgn * (x_f - bulge), s * w_half, z_free(s)), kFreeEdge});
+    // the attachment: the ring's nodes on this side (bitwise), the free edge's ends on the circle
+    std::vector<std::pair<double, Vec3>> attachment;
+    for (std::size_t i = 0; i < mitral_ring.node.size(); ++i) {
+      const Vec3& p = plane.position_mm[mitral_ring.node[i]];
+      if (sgn * (p.x() - M.x()) >= x_f - 1e-9 * r_m) attachment.emplace_back((p.y() - M.y()) / y_end, p);
     }
-    std::vector<Vec2> interior;
-    const double margin = 0.6 * h_leaf;
-    for (const Vec2& p : detail::hex_lattice(Vec2(x_m - r_m, -r_m), Vec2(x_m + r_m, r_m), h_leaf)) {
-      const Vec2 rel = p - M.head<2>();
-      if (rel.norm() > r_m - margin || sgn * rel.x() < x_f + margin) continue;
-      interior.push_back(p);
+    std::sort(attachment.begin(), attachment.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    if (ring_gap) {  // the commissures are ring nodes: s = +-1 exactly
+      attachment.front().first = -1;
+      attachment.back().first = 1;
+    } else {
+      attachment.insert(attachment.begin(), {-1.0, M + Vec3(sgn * x_f, -y_end, 0)});
+      attachment.emplace_back(1.0, M + Vec3(sgn * x_f, y_end, 0));
     }
-    auto height = [&](const Vec2& p) {
-      const Vec2 rel = p - M.head<2>();
-      const double d_arc = std::max(0.0, r_m - rel.norm()), d_chord = std::max(0.0, sgn * rel.x() - x_f);
-      return d_arc / (d_arc + d_chord + 1e-300) * z_free(rel.y() / w_half);
-    };
-    TriMesh leaf = graph_surface(side == 0 ? kMitralAnteriorBody : kMitralPosteriorBody, boundary, interior,
-                                 height, Tissue::kMitralLeaflet, g.mitral_leaflet_thickness_mm,
-                                 kLeafletSmoothingPasses);
-    // Fibres along the free edge (the coaptation line, y).
-    for (std::size_t tr = 0; tr < leaf.triangle_count(); ++tr)
-      leaf.fibre[tr] = tangent_in_triangle(leaf, tr, Vec3::UnitY(), Vec3::UnitX());
-    heart.bodies.push_back(std::move(leaf));
+    heart.bodies.push_back(mitral_lens(sgn, z_q).build(side == 0 ? kMitralAnteriorBody : kMitralPosteriorBody,
+                                                        Tissue::kMitralLeaflet, g.mitral_leaflet_thickness_mm,
+                                                        kAnchor | kMitralAnnulus, attachment, -Vec3::UnitZ()));
   }
   // Leaflets must stay inside the LV cavity (checked again on the mesh below).
   {
