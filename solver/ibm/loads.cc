@@ -104,4 +104,43 @@ MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, 
   return L;
 }
 
+WallShear wall_shear_stress(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
+                            double reynolds) {
+  const Markers& markers = transfer.markers();
+  const MarkerArrays& m = markers.markers();
+  const double h = markers.h();
+  const std::size_t n = m.size();
+  // Probe pairs (h, 2h) along +n for every active marker, along −n too for two-sided bodies.
+  std::vector<Vec3> points;
+  std::vector<std::ptrdiff_t> plus(n, -1), minus(n, -1);
+  points.reserve(2 * n);
+  for (std::size_t b = 0; b < n; ++b) {
+    if (!markers.active(b)) continue;
+    plus[b] = static_cast<std::ptrdiff_t>(points.size());
+    points.push_back(m.surface[b] + h * m.normal[b]);
+    points.push_back(m.surface[b] + 2 * h * m.normal[b]);
+    if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
+      minus[b] = static_cast<std::ptrdiff_t>(points.size());
+      points.push_back(m.surface[b] - h * m.normal[b]);
+      points.push_back(m.surface[b] - 2 * h * m.normal[b]);
+    }
+  }
+  const ProbeValues pv = probe(transfer, u, p, points);
+  const double nu = 1.0 / reynolds;
+  auto wss_at = [&](std::ptrdiff_t first, const Vec3& nn) {
+    const Eigen::Matrix3d& G1 = pv.velocity_gradient[first];
+    const Eigen::Matrix3d& G2 = pv.velocity_gradient[first + 1];
+    const Vec3 t = nu * (2 * (G1 + G1.transpose()) - (G2 + G2.transpose())) * nn;  // 2 t(h) − t(2h)
+    return (t - t.dot(nn) * nn).norm();
+  };
+  WallShear w;
+  w.plus.assign(n, 0.0);
+  w.minus.assign(n, 0.0);
+  for (std::size_t b = 0; b < n; ++b) {
+    if (plus[b] >= 0) w.plus[b] = wss_at(plus[b], m.normal[b]);
+    if (minus[b] >= 0) w.minus[b] = wss_at(minus[b], m.normal[b]);
+  }
+  return w;
+}
+
 }  // namespace systole::ibm

@@ -47,4 +47,17 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
 MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
                           double reynolds, const std::vector<Vec3>& acceleration = {});
 
+// Wall shear stress (eq 27) extrapolated to the wall (ours): the viscous traction t = τ·n from
+// MLS at two probes, X_b + h n and X_b + 2h n (and the mirrored pair on the − side of two-sided
+// bodies), extrapolated linearly to the surface, t_w = 2 t(h) − t(2h); WSS = |t_w − (t_w·n) n|.
+// compute_loads' WSS takes τ at the single probe h off the wall (eq 13), first order in h with
+// a large constant inside thin boundary layers (docs/ibm.md, Womersley). Twice the probes of
+// the loads: for output times, not every step. Inactive markers get 0. Collective.
+struct WallShear {
+  std::vector<double> plus;   // "+" side (the wetted side of one-sided bodies)
+  std::vector<double> minus;  // − side of two-sided bodies; else 0
+};
+WallShear wall_shear_stress(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
+                            double reynolds);
+
 }  // namespace systole::ibm

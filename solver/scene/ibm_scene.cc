@@ -35,6 +35,18 @@ std::complex<double> bessel_j0(std::complex<double> z) {
   return sum;
 }
 
+// J1 by its power series: Σ (−z²/4)^m (z/2) / (m! (m+1)!).
+std::complex<double> bessel_j1(std::complex<double> z) {
+  std::complex<double> term = 0.5 * z, sum = term;
+  const std::complex<double> q = -0.25 * z * z;
+  for (int m = 1; m < 200; ++m) {
+    term *= q / static_cast<double>(m * (m + 1));
+    sum += term;
+    if (std::abs(term) < 1e-17 * std::abs(sum)) break;
+  }
+  return sum;
+}
+
 // Womersley's pipe flow for f_x = cos ωt (G = 1), radius R, ν: u(r, t) = Re{Û(r) e^{iωt}},
 // Û = (1/(iω)) [1 − J0(λ r/R)/J0(λ)], λ = i^{3/2} Wo, Wo = R √(ω/ν).
 struct WomersleyPipe {
@@ -48,6 +60,16 @@ struct WomersleyPipe {
     const std::complex<double> i(0, 1);
     const std::complex<double> U = (1.0 / (i * omega)) * (1.0 - bessel_j0(lambda * (r / radius)) / j0_lambda);
     return std::real(U * std::exp(i * omega * t));
+  }
+  // ∂u/∂r at the wall: Û'(R) = (1/(iω)) (λ/R) J1(λ)/J0(λ) (J0' = −J1).
+  double wall_gradient(double t) const {
+    const std::complex<double> i(0, 1);
+    const std::complex<double> dU = (1.0 / (i * omega)) * (lambda / radius) * bessel_j1(lambda) / j0_lambda;
+    return std::real(dU * std::exp(i * omega * t));
+  }
+  double wall_gradient_amplitude() const {
+    const std::complex<double> i(0, 1);
+    return std::abs((1.0 / (i * omega)) * (lambda / radius) * bessel_j1(lambda) / j0_lambda);
   }
   double peak() const {  // amplitude at the axis
     const std::complex<double> i(0, 1);
@@ -310,6 +332,11 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
       fz{"force_z", "rho U^2 D^2", {}}, slip_series{"slip_rms", "U", {}};
   std::vector<double> drag_samples;
   double pipe_error = 0;
+  // Womersley: the markers' wall shear stress (eq 27 extrapolated to the wall from probes at h
+  // and 2h, ibm::wall_shear_stress; and the loads' single-probe value) against the exact
+  // |τ_w| = Re⁻¹ |∂u/∂r (R, t)|, largest difference over the samples.
+  double wss_error = 0, wss_probe_error = 0;
+  Series wss_series{"wall_shear_stress_mean", "rho U^2", {}}, wss_exact_series{"wall_shear_stress_exact", "rho U^2", {}};
   bool cancelled = false;
   ibm::SlipStats slip;
   auto pipe_error_now = [&]() {
@@ -380,7 +407,21 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
       drag_samples.push_back(mean_force.x() / (0.125 * kPi));
       drag_loads_samples.push_back(loads_force.x() / (0.125 * kPi));
     }
-    if (pipe) pipe_error = std::max(pipe_error, pipe_error_now());
+    if (pipe) {
+      pipe_error = std::max(pipe_error, pipe_error_now());
+      const ibm::MarkerLoads loads = ibm::compute_loads(forcing.transfer(), {V.u, V.v, V.w}, fluid.pressure(), spec.reynolds);
+      const ibm::WallShear wall = ibm::wall_shear_stress(forcing.transfer(), {V.u, V.v, V.w}, fluid.pressure(), spec.reynolds);
+      double sum = 0, sum_probe = 0;
+      std::size_t n = 0;
+      for (std::size_t b = 0; b < loads.wss.size(); ++b)
+        if (markers.active(b)) sum += wall.plus[b], sum_probe += loads.wss[b], ++n;
+      const double mean = n ? sum / static_cast<double>(n) : 0.0, mean_probe = n ? sum_probe / static_cast<double>(n) : 0.0;
+      const double exact = std::abs(pipe->wall_gradient(fluid.time())) / spec.reynolds;
+      wss_series.values.push_back(mean);
+      wss_exact_series.values.push_back(exact);
+      wss_error = std::max(wss_error, std::abs(mean - exact));
+      wss_probe_error = std::max(wss_probe_error, std::abs(mean_probe - exact));
+    }
     if (orifice) {
       flow_series.values.push_back(flow_rate());
       if (switch_time < 0 && fluid.time() >= 0.5 * end_time * (1 - 1e-12)) {
@@ -480,6 +521,9 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   } else {
     M["error_linf_relative"] = pipe_error / pipe->peak();
     M["reference_peak_velocity"] = pipe->peak();
+    M["reference_wall_shear_amplitude"] = pipe->wall_gradient_amplitude() / spec.reynolds;
+    M["wall_shear_error_linf_relative"] = wss_error / (pipe->wall_gradient_amplitude() / spec.reynolds);
+    M["wall_shear_probe_error_linf_relative"] = wss_probe_error / (pipe->wall_gradient_amplitude() / spec.reynolds);
     M["periods"] = periods;
     M["womersley_number"] = pipe->wo;
   }
@@ -505,6 +549,10 @@ RunResult run_ibm_case(const IbmCaseSpec& spec, MPI_Comm comm, double time_scale
   for (const std::string& w : markers.warnings()) result.notes.push_back(w);
   result.series = {std::move(ts), std::move(fx), std::move(fy), std::move(fz), std::move(slip_series)};
   if (orifice) result.series.push_back(std::move(flow_series));
+  if (pipe) {
+    result.series.push_back(std::move(wss_series));
+    result.series.push_back(std::move(wss_exact_series));
+  }
   return result;
 }
 
