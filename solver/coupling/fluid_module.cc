@@ -56,4 +56,9 @@ ibm::MarkerLoads FluidModule::loads() const {
   return ibm::compute_loads(forcing_.transfer(), {u.u, u.v, u.w}, fluid_.pressure(), fluid_.parameters().reynolds);
 }
 
+ibm::WallShear FluidModule::wall_shear() const {
+  const fluid::Velocity& u = fluid_.velocity();
+  return ibm::wall_shear_stress(forcing_.transfer(), {u.u, u.v, u.w}, fluid_.pressure(), fluid_.parameters().reynolds);
+}
+
 }  // namespace systole::coupling

@@ -60,6 +60,9 @@ class FluidModule final : public Module {
   void set_body_nodes(int body, const std::vector<ibm::Vec3>& position, const std::vector<ibm::Vec3>& velocity);
   // Output: loads on every marker at the current state. Collective.
   ibm::MarkerLoads loads() const;
+  // The wall shear stress (eq 27) extrapolated to the wall at every marker
+  // (ibm::wall_shear_stress: twice the loads' probes, for output times). Collective.
+  ibm::WallShear wall_shear() const;
   // The forcing's report of the last step (slip before the forcing, total force on the fluid).
   const ibm::ForcingReport& last_forcing() const { return forcing_.last_report(); }
 

@@ -74,7 +74,8 @@ FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& gr
   H5Fclose(file);
 }
 
-void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyGroup& group) const {
+void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyGroup& group,
+                                  const std::vector<std::vector<double>>* wss_pa) const {
   const std::string path = (dir_ / kBodiesFile).string();
   const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (file < 0) throw std::runtime_error("fsei fields: cannot open " + path);
@@ -99,16 +100,21 @@ void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyG
     if (has_tension(names_[b]))
       write_h5_dataset(file, n + "_active_tension_kpa", H5T_NATIVE_DOUBLE, m.active_tension_kpa().data(),
                        m.node_count(), 1, "fsei fields");
+    if (wss_pa) {
+      if (wss_pa->at(b).size() != m.node_count()) throw std::logic_error("fsei fields: wss_pa of " + names_[b] + " has the wrong size");
+      write_h5_dataset(file, n + "_wss_pa", H5T_NATIVE_DOUBLE, wss_pa->at(b).data(), m.node_count(), 1, "fsei fields");
+    }
   }
   H5Fclose(file);
 }
 
-void FseiFieldWriter::frame(double time_ms, const fluid::FluidSolver& fluid, const structure::BodyGroup& group) {
+void FseiFieldWriter::frame(double time_ms, const fluid::FluidSolver& fluid, const structure::BodyGroup& group,
+                            const std::vector<std::vector<double>>& wss_pa) {
   const int k = frames();
   fluid.write_fields(dir_ / fluid_file(k), units_);
   frames_.push_back({time_ms, true, ""});
   if (!rank0_) return;
-  write_bodies(k, time_ms, group);
+  write_bodies(k, time_ms, group, &wss_pa);
   write_xmf();
 }
 
@@ -116,7 +122,7 @@ void FseiFieldWriter::bodies_frame(double time_ms, const structure::BodyGroup& g
   const int k = frames();
   frames_.push_back({time_ms, false, label});
   if (!rank0_) return;
-  write_bodies(k, time_ms, group);
+  write_bodies(k, time_ms, group, nullptr);
   write_xmf();
 }
 
@@ -190,6 +196,9 @@ void FseiFieldWriter::write_xmf() const {
         if (has_tension(names_[b]))
           x << "     <Attribute Name=\"active_tension_kpa\" AttributeType=\"Scalar\" Center=\"Node\">"
             << nodes(nodes_[b], 1, p + "_active_tension_kpa") << "</Attribute>\n";
+        if (frames_[k].fluid)
+          x << "     <Attribute Name=\"wss_pa\" AttributeType=\"Scalar\" Center=\"Node\">"
+            << nodes(nodes_[b], 1, p + "_wss_pa") << "</Attribute>\n";
         x << "    </Grid>\n";
       }
       x << "   </Grid>\n";

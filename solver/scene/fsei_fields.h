@@ -8,7 +8,9 @@
 //                       /mesh/valvular_plane_positions_mm, and per frame /frames/<k>/:
 //                       time_ms, <body>_positions_mm, <body>_velocity_m_s, <body>_edge_strain
 //                       (per node, the signed strain (l - l0)/l of its most strained edge) and,
-//                       for the LV and LA, <body>_active_tension_kpa. Rank 0 writes.
+//                       for the LV and LA, <body>_active_tension_kpa; with the fluid, the
+//                       wall shear stress <body>_wss_pa (per node, the larger of the two
+//                       sides' for leaflets; ibm::wall_shear_stress). Rank 0 writes.
 //   fsei_fields.xmf     a temporal collection: per frame the fluid grid (when it has one), the
 //                       plane and every body. Rewritten after every frame, so a run that stops
 //                       leaves a readable file with the frames so far.
@@ -33,8 +35,10 @@ class FseiFieldWriter {
                   const geometry::TriMesh& plane, const structure::BodyGroup& group,
                   std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units);
 
-  // A frame of the fluid and the bodies at time_ms (collective).
-  void frame(double time_ms, const fluid::FluidSolver& fluid, const structure::BodyGroup& group);
+  // A frame of the fluid and the bodies at time_ms (collective); wss_pa[b]: body b's wall shear
+  // stress per node (Pa), the same on every rank.
+  void frame(double time_ms, const fluid::FluidSolver& fluid, const structure::BodyGroup& group,
+             const std::vector<std::vector<double>>& wss_pa);
   // A frame of the bodies only (rank 0; e.g. when a run stopped unstable), labelled in the xmf.
   void bodies_frame(double time_ms, const structure::BodyGroup& group, const std::string& label);
 
@@ -47,7 +51,8 @@ class FseiFieldWriter {
     bool fluid;
     std::string label;
   };
-  void write_bodies(int k, double time_ms, const structure::BodyGroup& group) const;
+  void write_bodies(int k, double time_ms, const structure::BodyGroup& group,
+                    const std::vector<std::vector<double>>* wss_pa) const;
   void write_xmf() const;
 
   std::filesystem::path dir_;

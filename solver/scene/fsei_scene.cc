@@ -254,7 +254,7 @@ const std::vector<std::string>& fsei_metric_names() {
       "lv_volume_start_ml", "lv_volume_min_ml", "lv_volume_end_ml", "la_volume_start_ml", "la_volume_end_ml",
       "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
       "lv_volume_balance_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
-      "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "simulated_time_ms", "fluid_steps", "structure_substeps",
+      "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "aortic_cusps_wss_max_pa", "simulated_time_ms", "fluid_steps", "structure_substeps",
       "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
       "ep_wall_s",
       "fluid_wall_s", "structure_wall_s", "wall_time_s"};
@@ -627,7 +627,38 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // 8. run, sampling at outputs.time_series_interval_ms
   RunResult result;
   std::vector<double> t_ms, p_lv, p_la, p_ao, v_lv, v_la, q_ao, q_mi, ke;
-  std::vector<double> twist, gls, gcs, u_mitral_tips, u_aortic_tips;
+  std::vector<double> twist, gls, gcs, u_mitral_tips, u_aortic_tips, wss_cusps;
+  // The wall shear stress (eq 27, extrapolated to the wall: ibm::wall_shear_stress) in Pa: per
+  // marker the larger of the two sides' for leaflets; per shell node the area-weighted mean of
+  // its tiles' values carried back by the tiling maps (ours). Collective.
+  const double pa_per_unit = mmhg_per_unit * units::kPaPerMmHg;
+  std::vector<int> link_of_marker_body(markers.bodies().size(), -1);
+  for (std::size_t li = 0; li < links.size(); ++li) link_of_marker_body[static_cast<std::size_t>(links[li].marker_body)] = static_cast<int>(li);
+  auto marker_wss_pa = [&](const ibm::WallShear& w, std::size_t mk) { return std::max(w.plus[mk], w.minus[mk]) * pa_per_unit; };
+  auto node_wss_pa = [&](const ibm::WallShear& w) {
+    const ibm::MarkerArrays& ma = markers.markers();
+    std::vector<std::vector<Vec3>> sum(links.size());  // per link, per tiled node: (Σ a v, Σ a, 0)
+    for (std::size_t li = 0; li < links.size(); ++li)
+      sum[li].assign(links[li].map.size(), Vec3::Zero());
+    for (std::size_t mk = 0; mk < ma.size(); ++mk) {
+      const int li = link_of_marker_body[static_cast<std::size_t>(ma.body[mk])];
+      if (li < 0 || !markers.active(mk)) continue;
+      const double v = marker_wss_pa(w, mk), a = ma.area[mk];
+      for (int c = 0; c < 3; ++c) sum[static_cast<std::size_t>(li)][static_cast<std::size_t>(ma.node[mk][c])] += Vec3(a * v, a, 0);
+    }
+    std::vector<std::vector<Vec3>> acc(group.body_count());
+    for (std::size_t b = 0; b < group.body_count(); ++b) acc[b].assign(group.body(b).node_count(), Vec3::Zero());
+    for (std::size_t li = 0; li < links.size(); ++li) {
+      const std::vector<Vec3> parent = links[li].map.spread(sum[li], group.body(links[li].shell).node_count());
+      for (std::size_t n = 0; n < parent.size(); ++n) acc[links[li].shell][n] += parent[n];
+    }
+    std::vector<std::vector<double>> out(group.body_count());
+    for (std::size_t b = 0; b < acc.size(); ++b) {
+      out[b].resize(acc[b].size());
+      for (std::size_t n = 0; n < acc[b].size(); ++n) out[b][n] = acc[b][n].y() > 0 ? acc[b][n].x() / acc[b][n].y() : 0.0;
+    }
+    return out;
+  };
   // Doppler-like sample volumes (ours): disks of half the orifice radius (at most 5 mm) on the
   // valves' axes, at the closed mitral leaflets' tips (their coaptation depth below the plane)
   // and at the closed aortic cusps' tips (their height above it); velocities along the flow
@@ -658,11 +689,23 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     gcs.push_back(wk.circumferential_strain);
     u_mitral_tips.push_back(disk_mean_w(fluid, mitral_tips, mitral_disk_mm) * kUmMmPerMs);
     u_aortic_tips.push_back(-disk_mean_w(fluid, aortic_tips, aortic_disk_mm) * kUmMmPerMs);
+    {  // the aortic cusps' largest wall shear stress (the seed's "> 3 Pa at the tips at peak systole")
+      const ibm::WallShear w = fluid_module.wall_shear();
+      const ibm::MarkerArrays& ma = markers.markers();
+      double most = 0;
+      for (std::size_t mk = 0; mk < ma.size(); ++mk) {
+        const int li = link_of_marker_body[static_cast<std::size_t>(ma.body[mk])];
+        if (li < 0 || !markers.active(mk)) continue;
+        const std::size_t shell = links[static_cast<std::size_t>(li)].shell;
+        if (deformable[shell].rfind("aortic_cusp_", 0) == 0) most = std::max(most, marker_wss_pa(w, mk));
+      }
+      wss_cusps.push_back(most);
+    }
     for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
-                     twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back()})
+                     twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back()})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
-                               "a chamber pressure, volume, flow, wall strain or tip velocity is not finite");
+                               "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
   };
   auto caps_closed = [&](double t) {  // from the LA stimulus to the next LV stimulus
     const double phase = std::fmod(t, period_ms);
@@ -689,7 +732,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     std::vector<std::string> names(deformable.begin(), deformable.end());
     fields = std::make_unique<FseiFieldWriter>(control.output_directory(), g, kDmMm,
                                                heart.body(geometry::kValvularPlaneBody), group, names, units);
-    fields->frame(0.0, fluid, group);
+    fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
     field_frames_done = 1;
   }
   const double dt_sample = s.outputs.time_series_interval_ms;
@@ -709,7 +752,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     t = next;
     set_caps(t);
     if (fields && std::abs(t - next_field) < 1e-9) {
-      fields->frame(t, fluid, group);
+      fields->frame(t, fluid, group, node_wss_pa(fluid_module.wall_shear()));
       ++field_frames_done;
     }
     if (field_only) continue;
@@ -777,6 +820,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["lv_circumferential_strain_min"] = min_of(gcs);
   M["mitral_tip_velocity_max_m_s"] = max_of(u_mitral_tips);
   M["aortic_tip_velocity_max_m_s"] = max_of(u_aortic_tips);
+  M["aortic_cusps_wss_max_pa"] = max_of(wss_cusps);
   M["simulated_time_ms"] = t;
   const auto& st = scheduler.stats();
   const std::size_t fluid_stage = with_ep ? 1 : 0;
@@ -813,6 +857,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   add("lv_circumferential_strain", "", gcs);
   add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
   add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
+  add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +
                          std::to_string(pts.ny) + "x" + std::to_string(pts.nz) + " points), " +
                          std::to_string(markers.size()) + " markers; chamber pressures relative to the outer-fluid probe");

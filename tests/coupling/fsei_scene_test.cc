@@ -170,6 +170,13 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   for (const char* name : {"mitral_tip_velocity_m_s", "aortic_tip_velocity_m_s"})
     for (double x : series(name)) EXPECT_LT(std::abs(x), 0.05) << name;
   EXPECT_GT(std::abs(series("lv_longitudinal_strain").back()), 0.0);  // the wall did move
+  // The cusps' wall shear stress: 0 with the blood at rest, then small behind the closed valve
+  // (< 1 Pa; the seed's peak systole has > 3 Pa at the tips).
+  const auto& wss = series("aortic_cusps_wss_max_pa");
+  ASSERT_EQ(wss.size(), p_lv.size());
+  EXPECT_EQ(wss.front(), 0.0);
+  for (double x : wss) EXPECT_TRUE(x >= 0 && x < 1.0) << x;
+  EXPECT_GT(wss.back(), 0.0);
 }
 
 // The seed's aorta pre-tension (fsei.aortic_pressure_mmhg, 60 mmHg by default): the blood in the
@@ -238,6 +245,28 @@ TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
     }
   }
   EXPECT_EQ(read_doubles(bodies, "frames/2/la_active_tension_kpa", dims).size(), heart.body(geometry::kLaBody).node_count());
+  // Wall shear stress per node (Pa): zero with the blood at rest (frame 0), finite and not
+  // negative everywhere, and non-zero on the cusps once the blood moves (frame 2). The largest
+  // cusp value of the sample at 0.2 ms is the series' (its markers' maximum bounds the nodes').
+  for (int k : {0, 2}) {
+    double most = 0;
+    for (auto name : geometry::kAorticCuspBodies) {
+      const auto w = read_doubles(bodies, "frames/" + std::to_string(k) + "/" + std::string(name) + "_wss_pa", dims);
+      ASSERT_EQ(w.size(), heart.body(name).node_count()) << name;
+      for (double v : w) {
+        ASSERT_TRUE(std::isfinite(v));
+        EXPECT_GE(v, 0.0);
+        most = std::max(most, v);
+      }
+    }
+    if (k == 0) {
+      EXPECT_EQ(most, 0.0);
+    } else {
+      EXPECT_GT(most, 0.0);
+      ASSERT_EQ(r.series.back().name, "aortic_cusps_wss_max_pa");
+      EXPECT_LE(most, r.series.back().values.back() * (1 + 1e-12));
+    }
+  }
   EXPECT_EQ(read_doubles(bodies, "frames/2/mitral_anterior_edge_strain", dims).size(),
             heart.body(geometry::kMitralAnteriorBody).node_count());
   // The pressure in mmHg: the cell at the aortic-root probe (8 mm above the aortic orifice)
@@ -265,6 +294,7 @@ TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
   EXPECT_EQ(times, 3u);
   EXPECT_NE(x.find("fsei_fluid_2.h5:/pressure"), std::string::npos);
   EXPECT_NE(x.find("fsei_bodies.h5:/frames/2/aorta_positions_mm"), std::string::npos);
+  EXPECT_NE(x.find("fsei_bodies.h5:/frames/2/aorta_wss_pa"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 
