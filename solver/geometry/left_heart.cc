@@ -303,7 +303,7 @@ struct LensLeaflet {
 // flat-annulus cusps' fibres end on free edges, and their cross-fibre law cannot).
 struct CrownCusps {
   Vec3 centre;                 // the aortic orifice centre, in the valvular plane
-  double r_a, H, h_tip, half_gap, h_mesh, thickness;
+  double H, h_tip, half_gap, h_mesh, thickness;
   double inset;  // the attachment's distance inside the root's analytic wall
   std::function<double(double, double)> wall_radius;  // (height above the plane, azimuth) -> mm
 
@@ -840,7 +840,7 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
                 " mm) below 0.8 x the root height (" + num(0.8 * y_stj) + " mm); 0 gives the flat-annulus cusps");
     const double half_ring_edge = r_a * std::sin(M_PI / n_a);
     const double half_gap = g.valve_gap_mm == 0 ? half_ring_edge : 0.5 * g.valve_gap_mm;
-    CrownCusps crown_cusps{A, r_a, H, h_c, half_gap, 0.8 * h_ring,
+    CrownCusps crown_cusps{A, H, h_c, half_gap, 0.8 * h_ring,
                            g.aortic_leaflet_thickness_mm, kCrownInsetPerEdge * h,
                            [&](double z_up, double th) { return radius(std::clamp(z_up, 0.0, s_arch0), th); }};
     for (int k = 0; k < 3; ++k) heart.bodies.push_back(crown_cusps.build(k, kAorticCuspBodies[k]));

@@ -48,6 +48,36 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
   return out;
 }
 
+namespace {
+
+// The probe points of the active markers: X_b + d h n for each d of `distances` (in cells),
+// and X_b − d h n as well on two-sided bodies. plus[b] / minus[b]: the index of marker b's first
+// point on each side (−1: none), its points for the following distances next to it.
+struct ProbePoints {
+  std::vector<Vec3> points;
+  std::vector<std::ptrdiff_t> plus, minus;
+};
+ProbePoints probe_points(const Markers& markers, const std::vector<double>& distances) {
+  const MarkerArrays& m = markers.markers();
+  const double h = markers.h();
+  ProbePoints out;
+  out.plus.assign(m.size(), -1);
+  out.minus.assign(m.size(), -1);
+  out.points.reserve(distances.size() * m.size());
+  for (std::size_t b = 0; b < m.size(); ++b) {
+    if (!markers.active(b)) continue;
+    out.plus[b] = static_cast<std::ptrdiff_t>(out.points.size());
+    for (double d : distances) out.points.push_back(m.surface[b] + d * h * m.normal[b]);
+    if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
+      out.minus[b] = static_cast<std::ptrdiff_t>(out.points.size());
+      for (double d : distances) out.points.push_back(m.surface[b] - d * h * m.normal[b]);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
                           double reynolds, const std::vector<Vec3>& acceleration) {
   const Markers& markers = transfer.markers();
@@ -55,19 +85,10 @@ MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, 
   const double h = markers.h();
   const std::size_t n = m.size();
   // Probes: "+" side for every active marker, "−" side for two-sided bodies.
-  std::vector<Vec3> points;
-  std::vector<std::ptrdiff_t> plus(n, -1), minus(n, -1);
-  points.reserve(n);
-  for (std::size_t b = 0; b < n; ++b) {
-    if (!markers.active(b)) continue;
-    plus[b] = static_cast<std::ptrdiff_t>(points.size());
-    points.push_back(m.surface[b] + h * m.normal[b]);
-    if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
-      minus[b] = static_cast<std::ptrdiff_t>(points.size());
-      points.push_back(m.surface[b] - h * m.normal[b]);
-    }
-  }
-  const ProbeValues pv = probe(transfer, u, p, points);
+  const ProbePoints pp = probe_points(markers, {1.0});
+  const std::vector<std::ptrdiff_t>& plus = pp.plus;
+  const std::vector<std::ptrdiff_t>& minus = pp.minus;
+  const ProbeValues pv = probe(transfer, u, p, pp.points);
   MarkerLoads L;
   L.force.assign(n, Vec3::Zero());
   L.wall_pressure.assign(n, 0.0);
@@ -108,24 +129,12 @@ WallShear wall_shear_stress(const Transfer& transfer, const ConstVelocityView& u
                             double reynolds) {
   const Markers& markers = transfer.markers();
   const MarkerArrays& m = markers.markers();
-  const double h = markers.h();
   const std::size_t n = m.size();
   // Probe pairs (h, 2h) along +n for every active marker, along −n too for two-sided bodies.
-  std::vector<Vec3> points;
-  std::vector<std::ptrdiff_t> plus(n, -1), minus(n, -1);
-  points.reserve(2 * n);
-  for (std::size_t b = 0; b < n; ++b) {
-    if (!markers.active(b)) continue;
-    plus[b] = static_cast<std::ptrdiff_t>(points.size());
-    points.push_back(m.surface[b] + h * m.normal[b]);
-    points.push_back(m.surface[b] + 2 * h * m.normal[b]);
-    if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
-      minus[b] = static_cast<std::ptrdiff_t>(points.size());
-      points.push_back(m.surface[b] - h * m.normal[b]);
-      points.push_back(m.surface[b] - 2 * h * m.normal[b]);
-    }
-  }
-  const ProbeValues pv = probe(transfer, u, p, points);
+  const ProbePoints pp = probe_points(markers, {1.0, 2.0});
+  const std::vector<std::ptrdiff_t>& plus = pp.plus;
+  const std::vector<std::ptrdiff_t>& minus = pp.minus;
+  const ProbeValues pv = probe(transfer, u, p, pp.points);
   const double nu = 1.0 / reynolds;
   auto wss_at = [&](std::ptrdiff_t first, const Vec3& nn) {
     const Eigen::Matrix3d& G1 = pv.velocity_gradient[first];
