@@ -1,7 +1,7 @@
 // systole-solve: runs a scenario's scene locally, without the service, and writes the same
 // outputs as a job (result.h5, metrics.json, pv_loop.csv). Also runs under mpirun (every rank
 // runs the scene, rank 0 writes). Tests and benchmarks use it.
-//   systole-solve SCENARIO.json --out DIR [--set path=value ...]
+//   systole-solve SCENARIO.json --out DIR [--checkpoint-dir DIR] [--set path=value ...]
 //   systole-solve --list-parameters        (the Markdown reference, docs/parameters.md)
 #include <mpi.h>
 
@@ -24,8 +24,10 @@ namespace {
 
 class ConsoleControl final : public scene::RunControl {
  public:
-  ConsoleControl(int rank, bool quiet, std::filesystem::path out) : rank_(rank), quiet_(quiet), out_(std::move(out)) {}
+  ConsoleControl(int rank, bool quiet, std::filesystem::path out, std::filesystem::path checkpoint)
+      : rank_(rank), quiet_(quiet), out_(std::move(out)), checkpoint_(std::move(checkpoint)) {}
   std::filesystem::path output_directory() override { return out_; }
+  std::filesystem::path checkpoint_directory() override { return checkpoint_; }
   void on_progress(const ProgressReport& p) override {
     if (rank_ != 0 || quiet_) return;
     std::cerr << "beat " << p.beat << "/" << p.beats_total << "  t = " << std::fixed << std::setprecision(3)
@@ -42,7 +44,7 @@ class ConsoleControl final : public scene::RunControl {
  private:
   int rank_;
   bool quiet_;
-  std::filesystem::path out_;
+  std::filesystem::path out_, checkpoint_;
 };
 
 }  // namespace
@@ -52,11 +54,14 @@ int main(int argc, char** argv) {
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   CLI::App app{"systole-solve: run a systole scenario locally and write its results"};
-  std::string file, out_dir;
+  std::string file, out_dir, checkpoint_dir;
   std::vector<std::string> sets;
   bool list_parameters = false, quiet = false;
   app.add_option("scenario", file, "scenario JSON file (proto3 JSON)");
   app.add_option("--out", out_dir, "output directory");
+  app.add_option("--checkpoint-dir", checkpoint_dir,
+                 "scenes fsi/fsei: keep checkpoints here (every fsei.checkpoint_interval_ms) and resume from one "
+                 "found here");
   app.add_option("--set", sets, "override a field: path.to.field=value (repeatable)");
   app.add_flag("--list-parameters", list_parameters, "print the parameter reference (Markdown) and exit");
   app.add_flag("--quiet", quiet, "no per-beat progress on stderr");
@@ -74,7 +79,7 @@ int main(int argc, char** argv) {
     } else {
       if (file.empty() || out_dir.empty()) throw InputError("usage: systole-solve SCENARIO.json --out DIR [--set path=value ...]");
       const config::Scenario scenario = bridge::validate(bridge::load_scenario_file(file, sets));
-      ConsoleControl control(rank, quiet, out_dir);
+      ConsoleControl control(rank, quiet, out_dir, checkpoint_dir);
       RunResult result = scene::run(scenario, control);
       if (rank == 0) {
         const auto files = io::write_results(out_dir, result, {config::to_json(scenario).dump(), ""});

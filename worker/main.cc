@@ -157,9 +157,12 @@ class JobSession {
 // RunControl for every rank: rank 0 decides, the decision is broadcast (collective).
 class WorkerControl final : public scene::RunControl {
  public:
-  WorkerControl(MPI_Comm comm, JobSession* session, fs::path output) : comm_(comm), session_(session), output_(std::move(output)) {}
+  WorkerControl(MPI_Comm comm, JobSession* session, fs::path output, fs::path checkpoints)
+      : comm_(comm), session_(session), output_(std::move(output)), checkpoints_(std::move(checkpoints)) {}
   // Where a scene writes extra files (3-D fields); rank 0 uploads every file found there.
   fs::path output_directory() override { return output_; }
+  // Per job, kept across attempts (--checkpoint-dir/<job>): a requeued job resumes there.
+  fs::path checkpoint_directory() override { return checkpoints_; }
   void on_progress(const ProgressReport& report) override {
     if (session_) session_->set_progress(report);
   }
@@ -173,7 +176,7 @@ class WorkerControl final : public scene::RunControl {
  private:
   MPI_Comm comm_;
   JobSession* session_;  // rank 0 only
-  fs::path output_;
+  fs::path output_, checkpoints_;
 };
 
 grpc::Status upload(v1::WorkerApi::Stub& stub, const std::string& worker_id, const std::string& job_id,
@@ -236,7 +239,8 @@ void report(v1::WorkerApi::Stub& stub,
 
 // Runs one job on every rank. Rank 0 talks to the server.
 void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::string& worker_id,
-             const std::string& job_id, const std::string& scenario_text, const fs::path& scratch) {
+             const std::string& job_id, const std::string& scenario_text, const fs::path& scratch,
+             const fs::path& checkpoint_root) {
   std::unique_ptr<JobSession> session;
   if (rank == 0) session = std::make_unique<JobSession>(*stub, worker_id, job_id);
   const fs::path dir = scratch / job_id;
@@ -249,8 +253,16 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
       if (!path.empty()) fs::remove_all(path, ignored);
     }
   } cleanup{rank == 0 ? dir : fs::path()};
+  // The job's checkpoints (scenes fsi, fsei) outlive this attempt: a job released by a stopping
+  // worker, failed retryably or requeued after a crash resumes from them on its next lease.
+  // They go once the job is finished for good (done, failed for good, cancelled by its client).
+  const fs::path checkpoints = checkpoint_root / job_id;
+  auto drop_checkpoints = [&] {
+    std::error_code ignored;
+    fs::remove_all(checkpoints, ignored);
+  };
   MPI_Barrier(comm);
-  WorkerControl control(comm, session.get(), dir);
+  WorkerControl control(comm, session.get(), dir, checkpoints);
   enum class Outcome { kDone, kCancelled, kFailed, kFatal } outcome = Outcome::kDone;
   std::string error;
   RunResult result;
@@ -281,6 +293,7 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
   }
   if (outcome == Outcome::kCancelled) {
     const bool by_client = session->cancel_requested();
+    if (by_client) drop_checkpoints();
     release.set_cancelled(by_client);
     session.reset();
     report(*stub, &v1::WorkerApi::Stub::ReleaseJob, release, by_client ? "cancel" : "release");
@@ -305,6 +318,7 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
       session->flush();
       session.reset();
       report(*stub, &v1::WorkerApi::Stub::CompleteJob, complete, "complete");
+      drop_checkpoints();
       spdlog::info("job {} done: EF {:.1f} %, CO {:.2f} l/min", job_id, result.metrics["ejection_fraction_percent"],
                    result.metrics["cardiac_output_l_min"]);
       return;
@@ -318,6 +332,7 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
   fail.set_job_id(job_id);
   fail.set_error(error);
   fail.set_retryable(outcome == Outcome::kFailed);
+  if (outcome != Outcome::kFailed) drop_checkpoints();
   session.reset();
   report(*stub, &v1::WorkerApi::Stub::FailJob, fail, "fail");
   spdlog::error("job {} failed ({}): {}", job_id, outcome == Outcome::kFailed ? "retryable" : "final", error);
@@ -336,11 +351,14 @@ int main(int argc, char** argv) {
   CLI::App app{"systole-worker: runs systole jobs leased from a systole-server (start it under mpirun)"};
   std::string server = "127.0.0.1:50051";
   std::string worker_id;
-  std::string scratch_dir;
+  std::string scratch_dir, checkpoint_dir;
   int max_jobs = 0;
   app.add_option("--server", server, "server gRPC address")->capture_default_str();
   app.add_option("--worker-id", worker_id, "name in leases and logs (default: host-pid)");
   app.add_option("--scratch", scratch_dir, "where results are written before upload (default: a temp dir)");
+  app.add_option("--checkpoint-dir", checkpoint_dir,
+                 "where jobs keep checkpoints across attempts (scenes fsi, fsei), one subdirectory per job; shared by "
+                 "the workers that may take over a job (default: <temp dir>/systole-checkpoints)");
   app.add_option("--max-jobs", max_jobs, "exit after this many jobs (0: never)")->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -362,6 +380,8 @@ int main(int argc, char** argv) {
     worker_id = std::string(host) + "-" + std::to_string(getpid());
   }
   const fs::path scratch = scratch_dir.empty() ? fs::temp_directory_path() / ("systole-worker-" + worker_id) : fs::path(scratch_dir);
+  const fs::path checkpoint_root =
+      checkpoint_dir.empty() ? fs::temp_directory_path() / "systole-checkpoints" : fs::path(checkpoint_dir);
 
   std::unique_ptr<v1::WorkerApi::Stub> stub;
   if (rank == 0) {
@@ -410,7 +430,7 @@ int main(int argc, char** argv) {
     if (command == kShutdown) break;
     broadcast_string(job_id, MPI_COMM_WORLD);
     broadcast_string(scenario_text, MPI_COMM_WORLD);
-    run_job(MPI_COMM_WORLD, rank, stub.get(), worker_id, job_id, scenario_text, scratch);
+    run_job(MPI_COMM_WORLD, rank, stub.get(), worker_id, job_id, scenario_text, scratch, checkpoint_root);
     ++jobs_done;
     if (max_jobs > 0 && jobs_done >= max_jobs) break;
     int stop = g_terminate ? 1 : 0;

@@ -1,9 +1,10 @@
 // Runs scene "fsei" or "fsi" (solver/scene/fsei_scene.h) from the default scenario with
 // path=value overrides, prints every sample on stderr as it comes (so a run that stops with a
-// diagnosis leaves its trend) and the metrics on stdout. The scenes are not yet offered by the
-// service (docs/fsei.md, status); this is how they are studied.
-//   fsei_case fsi|fsei [out=DIR] [fsei.end_time_ms=16] [fsei.resolution=coarse] [outputs.time_series_interval_ms=2] ...
+// diagnosis leaves its trend) and the metrics on stdout: how the scenes are studied.
+//   fsei_case fsi|fsei [out=DIR] [checkpoint=DIR] [fsei.end_time_ms=16] [fsei.resolution=coarse] ...
 // out=DIR: the output directory (field frames with fsei.field_interval_ms > 0).
+// checkpoint=DIR: checkpoints every fsei.checkpoint_interval_ms into DIR, and a resume from
+// the one found there (docs/fsei.md, "Checkpoint and restart").
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -17,8 +18,10 @@
 namespace {
 class Printer final : public systole::scene::RunControl {
  public:
-  Printer(int rank, std::filesystem::path out) : rank_(rank), out_(std::move(out)) {}
+  Printer(int rank, std::filesystem::path out, std::filesystem::path checkpoint)
+      : rank_(rank), out_(std::move(out)), checkpoint_(std::move(checkpoint)) {}
   std::filesystem::path output_directory() override { return out_; }
+  std::filesystem::path checkpoint_directory() override { return checkpoint_; }
   void on_progress(const systole::ProgressReport& r) override {
     if (rank_ != 0) return;
     std::fprintf(stderr, "%s\n", r.message.c_str());
@@ -28,7 +31,7 @@ class Printer final : public systole::scene::RunControl {
 
  private:
   int rank_;
-  std::filesystem::path out_;
+  std::filesystem::path out_, checkpoint_;
 };
 }  // namespace
 
@@ -41,16 +44,16 @@ int main(int argc, char** argv) {
     if (argc < 2 || (std::string(argv[1]) != "fsi" && std::string(argv[1]) != "fsei"))
       throw systole::InputError("usage: fsei_case fsi|fsei [path=value ...]");
     nlohmann::json doc = nlohmann::json::object();
-    std::filesystem::path out;
+    std::filesystem::path out, checkpoint;
     for (int a = 2; a < argc; ++a) {
       const std::string arg = argv[a];
       if (arg.rfind("out=", 0) == 0) out = arg.substr(4);
+      else if (arg.rfind("checkpoint=", 0) == 0) checkpoint = arg.substr(11);
       else systole::config::apply_override(doc, arg);
     }
-    doc["scene"] = "electromechanics";  // parse_scenario does not offer fsei/fsi yet
-    systole::config::Scenario s = systole::config::parse_scenario(doc);
-    s.scene = argv[1];
-    Printer control(rank, out);
+    doc["scene"] = argv[1];
+    const systole::config::Scenario s = systole::config::parse_scenario(doc);
+    Printer control(rank, out, checkpoint);
     const systole::RunResult r = systole::scene::run_fsei(s, control);
     if (rank == 0) {
       for (const auto& [k, v] : r.metrics) std::printf("%s = %.6g\n", k.c_str(), v);

@@ -63,6 +63,10 @@ pid_t LocalWorkers::spawn(int slot) {
     std::vector<std::string> args{"mpirun", "-np", ranks, "--oversubscribe", "--bind-to", "none",
                                   options_.worker_binary, "--server", options_.server_address,
                                   "--worker-id", worker_id};
+    if (!options_.checkpoint_dir.empty()) {
+      args.push_back("--checkpoint-dir");
+      args.push_back(options_.checkpoint_dir.string());
+    }
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);

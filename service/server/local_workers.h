@@ -20,6 +20,7 @@ struct LocalWorkerOptions {
   int count = 0;               // workers
   int ranks = 1;               // MPI ranks per worker
   std::filesystem::path log_dir;
+  std::filesystem::path checkpoint_dir;  // the workers' --checkpoint-dir (shared: a requeued job resumes)
 };
 
 class LocalWorkers {

@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
       const std::string connect = (grpc_host == "0.0.0.0" || grpc_host == "[::]" ? "127.0.0.1" : grpc_host) + ":" +
                                   std::to_string(grpc_port);
       workers = std::make_unique<service::LocalWorkers>(service::LocalWorkerOptions{
-          worker_binary, connect, local_workers, ranks, fs::path(data_dir) / "logs"});
+          worker_binary, connect, local_workers, ranks, fs::path(data_dir) / "logs", fs::path(data_dir) / "checkpoints"});
     }
 
     if (!port_file.empty()) {

@@ -569,6 +569,11 @@ std::vector<Param> build_table() {
                            "vorticity (1/s) in fsei_fluid_<k>.h5, every body's nodes (positions, velocities, the "
                            "largest edge strain, the active tension) in fsei_bodies.h5, and fsei_fields.xmf that "
                            "shows them together in ParaView (mm), in the output directory."));
+  t.push_back(SYSTOLE_REAL(fsei.checkpoint_interval_ms, "ms", 10, 0, 1e5,
+                           "Scenes 'fsei'/'fsi': the whole coupled state is checkpointed every this much simulated "
+                           "time where the caller keeps checkpoints (a worker: per job, so a requeued job resumes; "
+                           "systole-solve --checkpoint-dir); a run finding a checkpoint of the same scenario there "
+                           "resumes from it, bitwise as the straight run (docs/fsei.md). 0: none."));
   return t;
 }
 

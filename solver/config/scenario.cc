@@ -19,7 +19,7 @@ const std::vector<std::string>& known_scenes() {
 // Updated as each scene lands (its issue); see solver/scene/.
 const std::vector<std::string>& implemented_scenes() {
   static const std::vector<std::string> scenes{"lumped", "analytic", "fluid", "electro", "mechanics", "ibm",
-                                                "electromechanics"};
+                                                "electromechanics", "fsi", "fsei"};
   return scenes;
 }
 

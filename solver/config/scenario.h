@@ -211,6 +211,7 @@ struct Fsei {
   double aortic_pressure_mmhg;          // the aorta's ground pressure at t = 0 (an outer load on its wall)
   double aortic_pressure_ramp_ms;       // 0: at once; else the outer load ramped over it, blood from rest (ours)
   double field_interval_ms;             // 0: no fields; else a frame of fluid and bodies every this
+  double checkpoint_interval_ms;        // the whole coupled state every this (RunControl::checkpoint_directory)
 };
 
 struct Scenario {

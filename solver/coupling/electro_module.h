@@ -16,6 +16,7 @@
 //   repeated: the value the repeated pass would compute there.
 #include <string>
 
+#include "solver/core/state_archive.h"
 #include "solver/coupling/module.h"
 #include "solver/electro/tissue.h"
 
@@ -34,6 +35,13 @@ class ElectroModule final : public Module {
   electro::TissueSolver& tissue() { return tissue_; }
   const electro::TissueSolver& tissue() const { return tissue_; }
   long long tissue_steps() const { return tissue_steps_; }
+  // Checkpoints: the module's clock (the tissue's state is the tissue's to export).
+  void export_state(StateArchive& archive, const std::string& prefix) const {
+    archive.put_scalar(prefix + "clock_ms", clock_ms_);
+  }
+  void import_state(const StateArchive& archive, const std::string& prefix) {
+    clock_ms_ = saved_ms_ = archive.scalar(prefix + "clock_ms");
+  }
 
  private:
   std::string name_ = "electro";

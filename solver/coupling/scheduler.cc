@@ -150,6 +150,39 @@ double Scheduler::relax(std::size_t k, bool relaxed_transfer, int iteration) {
   return change;
 }
 
+void Scheduler::export_state(StateArchive& a, const std::string& prefix) const {
+  a.put_scalar(prefix + "time_ms", time_ms_);
+  a.put(prefix + "counts", {static_cast<double>(stats_.intervals), static_cast<double>(stats_.passes),
+                            static_cast<double>(stats_.unconverged_intervals), stats_.max_final_residual});
+  std::vector<double> m;
+  for (const ModuleStats& s : stats_.modules)
+    m.insert(m.end(), {static_cast<double>(s.steps), s.min_step_ms, s.max_step_ms, s.max_step_over_limit, s.wall_time_s});
+  a.put(prefix + "modules", m);
+}
+
+void Scheduler::import_state(const StateArchive& a, const std::string& prefix) {
+  const double t = a.scalar(prefix + "time_ms");
+  for (const Stage& s : stages_)
+    if (std::abs(s.module->time_ms() - t) > 1e-9 * std::max(1.0, std::abs(t)))
+      throw std::invalid_argument("Scheduler::import_state: module '" + s.module->name() + "' is at t = " +
+                                  number(s.module->time_ms()) + " ms, the checkpoint at " + number(t) + " ms");
+  const std::vector<double>& c = a.get(prefix + "counts", 4);
+  const std::vector<double>& m = a.get(prefix + "modules", static_cast<long>(5 * stats_.modules.size()));
+  time_ms_ = t;
+  stats_.intervals = static_cast<long long>(c[0]);
+  stats_.passes = static_cast<long long>(c[1]);
+  stats_.unconverged_intervals = static_cast<long long>(c[2]);
+  stats_.max_final_residual = c[3];
+  for (std::size_t k = 0; k < stats_.modules.size(); ++k) {
+    ModuleStats& s = stats_.modules[k];
+    s.steps = static_cast<long long>(m[5 * k]);
+    s.min_step_ms = m[5 * k + 1];
+    s.max_step_ms = m[5 * k + 2];
+    s.max_step_over_limit = m[5 * k + 3];
+    s.wall_time_s = m[5 * k + 4];
+  }
+}
+
 void Scheduler::advance_to(double t_ms) {
   if (!(t_ms >= time_ms_ - 1e-12 * std::max(1.0, std::abs(time_ms_))))
     throw std::invalid_argument("Scheduler::advance_to: t = " + number(t_ms) + " ms is before the current time " +

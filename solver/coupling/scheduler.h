@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/core/state_archive.h"
 #include "solver/coupling/module.h"
 
 namespace systole::coupling {
@@ -94,6 +95,12 @@ class Scheduler {
   void advance_to(double t_ms);
 
   const SchedulerStats& stats() const { return stats_; }
+  // Checkpoints (between intervals): the clock and the statistics under `prefix`. The modules'
+  // own states are the scene's to save; import_state() expects every module already restored
+  // to the exported time (std::invalid_argument otherwise; InputError for a missing entry or
+  // another stage count).
+  void export_state(StateArchive& archive, const std::string& prefix) const;
+  void import_state(const StateArchive& archive, const std::string& prefix);
 
  private:
   double run_pass(double t_end_ms, int iteration);

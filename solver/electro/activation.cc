@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace systole::electro {
 
@@ -33,6 +35,18 @@ void ActivationTracker::update(double t0, const std::vector<double>& v0, double 
     const double level = rest_mv_[i] + 0.1 * (peak_mv_[i] - rest_mv_[i]);
     if (v0[i] > level && v1[i] <= level) repol_ms_[i] = t0 + (t1 - t0) * (v0[i] - level) / (v0[i] - v1[i]);
   }
+}
+
+void ActivationTracker::restore(std::vector<double> activation_ms, std::vector<double> repolarisation_ms,
+                                std::vector<double> peak_mv) {
+  const std::size_t n = rest_mv_.size();
+  if (activation_ms.size() != n || repolarisation_ms.size() != n || peak_mv.size() != n)
+    throw std::invalid_argument("ActivationTracker::restore: arrays of " + std::to_string(activation_ms.size()) + ", " +
+                                std::to_string(repolarisation_ms.size()) + ", " + std::to_string(peak_mv.size()) +
+                                " values for " + std::to_string(n) + " nodes");
+  activation_ms_ = std::move(activation_ms);
+  repol_ms_ = std::move(repolarisation_ms);
+  peak_mv_ = std::move(peak_mv);
 }
 
 std::vector<double> ActivationTracker::apd_ms() const {

@@ -21,6 +21,11 @@ class ActivationTracker {
   const std::vector<double>& repolarisation_ms() const { return repol_ms_; }
   std::vector<double> apd_ms() const;
   double threshold_mv() const { return threshold_mv_; }
+  // The tracker's evolving state (checkpoints): the peaks so far besides the two time arrays.
+  const std::vector<double>& peak_mv() const { return peak_mv_; }
+  // Puts back what activation_ms(), repolarisation_ms() and peak_mv() returned; throws
+  // std::invalid_argument for arrays of another node count.
+  void restore(std::vector<double> activation_ms, std::vector<double> repolarisation_ms, std::vector<double> peak_mv);
 
  private:
   std::vector<double> rest_mv_;

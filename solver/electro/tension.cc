@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace systole::electro {
 
@@ -12,6 +14,13 @@ double tension_psi(const TensionParams& p, double v) {
 }
 
 ActiveTension::ActiveTension(std::size_t nodes, TensionParams params) : params_(params), tau_kpa_(nodes, 0.0) {}
+
+void ActiveTension::restore(std::vector<double> tension_kpa) {
+  if (tension_kpa.size() != tau_kpa_.size())
+    throw std::invalid_argument("ActiveTension::restore: " + std::to_string(tension_kpa.size()) + " values for " +
+                                std::to_string(tau_kpa_.size()) + " nodes");
+  tau_kpa_ = std::move(tension_kpa);
+}
 
 void ActiveTension::advance(double dt_ms, const std::vector<double>& vm, const std::vector<double>& rest,
                             const std::vector<double>& peak) {

@@ -32,6 +32,9 @@ class ActiveTension {
   void advance(double dt_ms, const std::vector<double>& vm_mv, const std::vector<double>& rest_mv,
                const std::vector<double>& peak_mv);
   const std::vector<double>& tension_kpa() const { return tau_kpa_; }
+  // Puts back a state tension_kpa() returned (checkpoints); std::invalid_argument for another
+  // node count.
+  void restore(std::vector<double> tension_kpa);
   const TensionParams& params() const { return params_; }
 
  private:

@@ -298,6 +298,41 @@ void TissueSolver::diffusion(double tau_ms, double theta) {
   diffusion_cpu_s_ += thread_cpu_s() - cpu0;
 }
 
+void TissueSolver::export_state(StateArchive& a, const std::string& prefix) const {
+  a.put_scalar(prefix + "time_ms", t_ms_);
+  a.put(prefix + "vm_mv", vm_);
+  a.put(prefix + "ue_mv", ue_);
+  for (std::size_t d = 0; d < domains_.size(); ++d) {
+    const std::string dp = prefix + "domain_" + std::to_string(d) + "/";
+    const ionic::CellModel& m = *domains_[d].model;
+    for (std::size_t k = 0; k < m.state_count(); ++k) a.put(dp + std::to_string(k), m.state(k));
+    a.put(dp + "vm_mv", domains_[d].vm);
+    a.put(dp + "iion", domains_[d].iion);
+  }
+  a.put(prefix + "activation_ms", activation_.activation_ms());
+  a.put(prefix + "repolarisation_ms", activation_.repolarisation_ms());
+  a.put(prefix + "activation_peak_mv", activation_.peak_mv());
+  a.put(prefix + "tension_kpa", tension_.tension_kpa());
+}
+
+void TissueSolver::import_state(const StateArchive& a, const std::string& prefix) {
+  const long n = static_cast<long>(vm_.size());
+  t_ms_ = a.scalar(prefix + "time_ms");
+  vm_ = a.get(prefix + "vm_mv", n);
+  ue_ = a.get(prefix + "ue_mv", n);
+  for (std::size_t d = 0; d < domains_.size(); ++d) {
+    const std::string dp = prefix + "domain_" + std::to_string(d) + "/";
+    ionic::CellModel& m = *domains_[d].model;
+    const long nd = static_cast<long>(domains_[d].nodes.size());
+    for (std::size_t k = 0; k < m.state_count(); ++k) m.state(k) = a.get(dp + std::to_string(k), nd);
+    domains_[d].vm = a.get(dp + "vm_mv", static_cast<long>(domains_[d].vm.size()));
+    domains_[d].iion = a.get(dp + "iion", static_cast<long>(domains_[d].iion.size()));
+  }
+  activation_.restore(a.get(prefix + "activation_ms", n), a.get(prefix + "repolarisation_ms", n),
+                      a.get(prefix + "activation_peak_mv", n));
+  tension_.restore(a.get(prefix + "tension_kpa", n));
+}
+
 void TissueSolver::step() {
   const double dt = options_.dt_ms;
   const std::vector<double> v_old = vm_;

@@ -29,6 +29,7 @@
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
+#include "solver/core/state_archive.h"
 #include "solver/electro/activation.h"
 #include "solver/electro/fem.h"
 #include "solver/electro/ionic/cell_model.h"
@@ -81,6 +82,12 @@ class TissueSolver {
   // Advances by one dt. Throws InstabilityError("electro", ...) if Vm leaves [-1000, 1000] mV
   // or becomes NaN.
   void step();
+  // Checkpoints: the whole evolving state (Vm, u_e, every domain's cell-model state, the
+  // activation tracker, the active tension, the clock) under `prefix`. import_state() of what
+  // export_state() wrote, into a solver built from the same mesh and options, continues
+  // bitwise as the exporting solver would; InputError for a missing entry or another size.
+  void export_state(StateArchive& archive, const std::string& prefix) const;
+  void import_state(const StateArchive& archive, const std::string& prefix);
   double time_ms() const { return t_ms_; }
   double dt_ms() const { return options_.dt_ms; }
 

@@ -1,6 +1,7 @@
 #include "solver/scene/fsei_fields.h"
 
 #include <hdf5.h>
+#include <mpi.h>
 
 #include <cmath>
 #include <fstream>
@@ -32,7 +33,8 @@ std::vector<double> flat(const std::vector<geometry::Vec3>& v) {
 
 FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
                                  const geometry::TriMesh& plane, const structure::BodyGroup& group,
-                                 std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units)
+                                 std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units,
+                                 const std::vector<double>* resumed_times_ms)
     : dir_(std::move(dir)),
       nx_(grid.nx()),
       ny_(grid.ny()),
@@ -43,6 +45,8 @@ FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& gr
       names_(std::move(names)),
       plane_nodes_(plane.node_count()),
       plane_triangles_(plane.triangle_count()),
+      plane_(plane),
+      group_(group),
       units_(fluid_units),
       rank0_(is_rank_zero()) {
   if (names_.size() != group.body_count())
@@ -53,8 +57,47 @@ FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& gr
     triangles_.push_back(group.body(b).stress_free_mesh().triangle_count());
     nodes_.push_back(group.body(b).node_count());
   }
+  const std::string path = (dir_ / kBodiesFile).string();
+  if (resumed_times_ms) {
+    // the earlier frames count as present when the bodies file holds every one of them (rank
+    // 0 looks, every rank learns the answer)
+    int present = 0;
+    if (rank0_) {
+      std::error_code ec;
+      if (std::filesystem::exists(path, ec)) {
+        const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+        present = file >= 0 ? 1 : 0;
+        for (std::size_t k = 0; present && k < resumed_times_ms->size(); ++k)
+          present = H5Lexists(file, ("frames/" + std::to_string(k)).c_str(), H5P_DEFAULT) > 0 ? 1 : 0;
+        if (file >= 0) H5Fclose(file);
+      }
+    }
+    int ready = 0;
+    MPI_Initialized(&ready);
+    if (ready) MPI_Bcast(&present, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    earlier_present_ = present != 0;
+    for (double t : *resumed_times_ms) frames_.push_back({t, true, "", earlier_present_});
+  }
   if (!rank0_) return;
   std::filesystem::create_directories(dir_);
+  if (!resumed_times_ms || !earlier_present_) {
+    create_bodies_file();
+  } else {
+    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    if (file < 0) throw std::runtime_error("fsei fields: cannot open " + path);
+    for (std::size_t k = resumed_times_ms->size();; ++k) {  // the interrupted attempt's later frames
+      const std::string g = "frames/" + std::to_string(k);
+      if (H5Lexists(file, g.c_str(), H5P_DEFAULT) <= 0) break;
+      H5Ldelete(file, g.c_str(), H5P_DEFAULT);
+    }
+    H5Fclose(file);
+  }
+  if (resumed_times_ms) write_xmf();
+}
+
+void FseiFieldWriter::create_bodies_file() const {
+  const geometry::TriMesh& plane = plane_;
+  const structure::BodyGroup& group = group_;
   const std::string path = (dir_ / kBodiesFile).string();
   const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file < 0) throw std::runtime_error("fsei fields: cannot create " + path);
@@ -72,6 +115,12 @@ FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& gr
                    xp.data(), plane.node_count(), 3, "fsei fields");
   for (std::size_t b = 0; b < group.body_count(); ++b) triangles(group.body(b).stress_free_mesh(), names_[b]);
   H5Fclose(file);
+}
+
+std::vector<double> FseiFieldWriter::frame_times_ms() const {
+  std::vector<double> t;
+  for (const Frame& f : frames_) t.push_back(f.time_ms);
+  return t;
 }
 
 void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyGroup& group,
@@ -154,6 +203,7 @@ void FseiFieldWriter::write_xmf() const {
       << "  <Grid Name=\"fsei\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     for (std::size_t k = 0; k < frames_.size(); ++k) {
       const Frame& f = frames_[k];
+      if (!f.present) continue;
       std::string frame_name = "frame" + std::to_string(k);
       if (!f.label.empty()) frame_name.append(" ").append(f.label);
       x << "   <Grid Name=\"" << frame_name << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\""

@@ -31,9 +31,18 @@ class FseiFieldWriter {
  public:
   // names[b]: the name of group body b; mm_per_unit: the fluid grid's length unit in mm;
   // velocity/pressure/vorticity scales: nondimensional → m/s, mmHg, 1/s.
+  // resumed_times_ms (a run resumed from a checkpoint, fsei_checkpoint.h): the times of the
+  // frames the checkpointed run had written. When fsei_bodies.h5 in `dir` holds all of them,
+  // its frames from k = resumed_times_ms->size() on (left by the interrupted attempt after the
+  // checkpoint) are removed and the numbering continues; otherwise (another output directory)
+  // a new file is started and the earlier frames are left out of the xmf
+  // (earlier_frames_present() is then false). Collective (rank 0 looks, every rank learns).
+  // The plane and the group must outlive the writer.
   FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
                   const geometry::TriMesh& plane, const structure::BodyGroup& group,
-                  std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units);
+                  std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units,
+                  const std::vector<double>* resumed_times_ms = nullptr);
+  bool earlier_frames_present() const { return earlier_present_; }
 
   // A frame of the fluid and the bodies at time_ms (collective); wss_pa[b]: body b's wall shear
   // stress per node (Pa), the same on every rank.
@@ -43,6 +52,8 @@ class FseiFieldWriter {
   void bodies_frame(double time_ms, const structure::BodyGroup& group, const std::string& label);
 
   int frames() const { return static_cast<int>(frames_.size()); }
+  // The times of the frames so far (checkpoints).
+  std::vector<double> frame_times_ms() const;
   const std::filesystem::path& directory() const { return dir_; }
 
  private:
@@ -50,10 +61,12 @@ class FseiFieldWriter {
     double time_ms;
     bool fluid;
     std::string label;
+    bool present = true;  // false: written by an earlier attempt into another directory
   };
   void write_bodies(int k, double time_ms, const structure::BodyGroup& group,
                     const std::vector<std::vector<double>>* wss_pa) const;
   void write_xmf() const;
+  void create_bodies_file() const;
 
   std::filesystem::path dir_;
   int nx_, ny_, nz_;
@@ -61,9 +74,12 @@ class FseiFieldWriter {
   std::vector<std::string> names_;
   std::vector<std::size_t> triangles_, nodes_;
   std::size_t plane_nodes_, plane_triangles_;
+  const geometry::TriMesh& plane_;
+  const structure::BodyGroup& group_;
   fluid::FluidSolver::FieldSelection units_;
   bool rank0_;
   std::vector<Frame> frames_;
+  bool earlier_present_ = true;
 };
 
 }  // namespace systole::scene

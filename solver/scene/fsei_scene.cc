@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -25,6 +26,7 @@
 #include "solver/lumped/activation.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
+#include "solver/scene/fsei_checkpoint.h"
 #include "solver/scene/fsei_fields.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/structure/contact.h"
@@ -51,6 +53,7 @@ class ShiftedClock final : public coupling::Module {
   ShiftedClock(coupling::Module& inner, double offset_ms) : inner_(inner), offset_ms_(offset_ms) {}
   const std::string& name() const override { return inner_.name(); }
   double time_ms() const override { return inner_.time_ms() - offset_ms_; }
+  double offset_ms() const { return offset_ms_; }
   double max_step_ms() const override { return inner_.max_step_ms(); }
   void step(double dt_ms) override { inner_.step(dt_ms); }
   void save() override { inner_.save(); }
@@ -257,7 +260,7 @@ const std::vector<std::string>& fsei_metric_names() {
       "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "aortic_cusps_wss_max_pa", "simulated_time_ms", "fluid_steps", "structure_substeps",
       "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
       "ep_wall_s",
-      "fluid_wall_s", "structure_wall_s", "wall_time_s"};
+      "fluid_wall_s", "structure_wall_s", "resumed_from_ms", "wall_time_s"};
   return names;
 }
 
@@ -275,6 +278,26 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                        std::to_string(s.electro.time_step_ms) + " ms");
     if (s.electro.mesh != "left_heart")
       throw InputError("scene fsei needs electro.mesh = \"left_heart\" (got \"" + s.electro.mesh + "\")");
+  }
+
+  // 0. a checkpoint to resume from (RunControl::checkpoint_directory, fsei_checkpoint.h): one
+  //    of this scenario (its fingerprint; the run's length, outputs and intervals may differ)
+  const std::filesystem::path checkpoint_root = control.checkpoint_directory();
+  const std::string fingerprint = scenario_fingerprint(s);
+  std::optional<std::filesystem::path> resume_from;
+  StateArchive resumed;
+  if (!checkpoint_root.empty()) {
+    resume_from = CheckpointDirectory(checkpoint_root).resumable();
+    if (resume_from) {
+      std::string stored;
+      resumed = read_state_file(*resume_from / "state.h5", stored);
+      check_fingerprint(*resume_from, stored, fingerprint);
+      const double t_resumed = resumed.scalar("scene/time_ms");
+      if (t_resumed > end_ms + 1e-9)
+        throw InputError("the checkpoint in " + resume_from->string() + " is at t = " + std::to_string(t_resumed) +
+                         " ms, past this run's end (fsei.end_time_ms or beats: " + std::to_string(end_ms) +
+                         " ms); ask for a longer run or remove the checkpoint directory");
+    }
   }
 
   // 1. the grid of the preset, and the heart in its box (build_left_heart checks the fit)
@@ -500,8 +523,20 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     ep_module = std::make_unique<coupling::ElectroModule>(*tissue);
     const double dt = s.electro.time_step_ms;
     const long n = std::lround(s.av_delay_ms / dt);
-    for (long i = 0; i < n; ++i) ep_module->step(dt);
-    ep_clock = std::make_unique<ShiftedClock>(*ep_module, n * dt);
+    // The scene's t = 0 is the EP clock after the pre-run, exactly: the clock is a sum of n
+    // steps, and an offset of n dt would leave the scene's clock 1e-12 ms off the fluid's, so
+    // the scheduler's first interval ended on a 1e-12 ms sliver that the fluid stepped (its
+    // pressure then blew up: the fsei runs before session 9 stopped at 0.3 ms).
+    double ep_offset_ms = 0;
+    if (resume_from) {
+      tissue->import_state(resumed, "ep/");
+      ep_module->import_state(resumed, "ep_module/");
+      ep_offset_ms = resumed.scalar("ep_module/offset_ms");
+    } else {
+      for (long i = 0; i < n; ++i) ep_module->step(dt);
+      ep_offset_ms = ep_module->time_ms();
+    }
+    ep_clock = std::make_unique<ShiftedClock>(*ep_module, ep_offset_ms);
     set_tension(&tissue->active_tension_kpa());
   } else {
     set_tension(nullptr);
@@ -602,7 +637,17 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   so.mode = fs.strong_coupling ? coupling::CouplingMode::strong : coupling::CouplingMode::loose;
   so.strong_tolerance = s.coupling.strong_tolerance;
   so.strong_max_iterations = s.coupling.strong_max_iterations;
+  // A resumed run: the fluid, the shells and the scheduler where the checkpoint left them, and
+  // the markers on the shells' nodes (what the last interval's transfer had set)
+  if (resume_from) {
+    fluid.restore_checkpoint(*resume_from / "fluid.h5");
+    group.import_state(resumed, "structure/");
+    std::vector<double> d;
+    nodes.read(d);
+    nodes.write(d);
+  }
   coupling::Scheduler scheduler(std::move(stages), so);
+  if (resume_from) scheduler.import_state(resumed, "scheduler/");
 
   // 7. probes: LV at 40 % of the long axis below the plane, the aortic root 8 mm above the
   //    aortic orifice, the LA at its nodes' centroid, the outer reference in a box corner (ours)
@@ -718,11 +763,28 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         forcing.markers_moved();
       }
   };
-  sample();
+  // The scene's own state in a checkpoint: the series sampled so far and the field frames.
+  const std::vector<std::pair<std::string, std::vector<double>*>> series_state{
+      {"t_ms", &t_ms},       {"p_lv", &p_lv},   {"p_la", &p_la},   {"p_ao", &p_ao},
+      {"v_lv", &v_lv},       {"v_la", &v_la},   {"q_ao", &q_ao},   {"q_mi", &q_mi},
+      {"ke", &ke},           {"twist", &twist}, {"gls", &gls},     {"gcs", &gcs},
+      {"u_mitral_tips", &u_mitral_tips},        {"u_aortic_tips", &u_aortic_tips},
+      {"wss_cusps", &wss_cusps}};
+  double t = 0;
   set_caps(0);
+  if (resume_from) {
+    t = resumed.scalar("scene/time_ms");
+    const long samples = static_cast<long>(resumed.get("series/t_ms").size());
+    for (auto& [name, v] : series_state) *v = resumed.get("series/" + name, samples);
+    set_caps(t);
+  } else {
+    sample();
+  }
   // Field frames (fsei.field_interval_ms) from t = 0, into the caller's output directory.
   std::unique_ptr<FseiFieldWriter> fields;
   long field_frames_done = 0;
+  std::vector<double> resumed_frames_ms;
+  if (resume_from && resumed.has("scene/field_times_ms")) resumed_frames_ms = resumed.get("scene/field_times_ms");
   if (fs.field_interval_ms > 0 && !control.output_directory().empty()) {
     fluid::FluidSolver::FieldSelection units;
     units.velocity_scale = kUmMmPerMs;                 // U (mm/ms = m/s)
@@ -731,12 +793,47 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     units.gzip_level = 4;                              // shuffle + gzip (ours: level 4)
     std::vector<std::string> names(deformable.begin(), deformable.end());
     fields = std::make_unique<FseiFieldWriter>(control.output_directory(), g, kDmMm,
-                                               heart.body(geometry::kValvularPlaneBody), group, names, units);
-    fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
-    field_frames_done = 1;
+                                               heart.body(geometry::kValvularPlaneBody), group, names, units,
+                                               resume_from ? &resumed_frames_ms : nullptr);
+    if (!resume_from) fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
+    field_frames_done = fields->frames();
   }
+  // Checkpoints every fsei.checkpoint_interval_ms of simulated time (at a sample), and when the
+  // run is cancelled (a worker that stops hands the job back at that point). Collective.
+  const double checkpoint_ms = checkpoint_root.empty() ? 0.0 : fs.checkpoint_interval_ms;
+  double next_checkpoint_ms = checkpoint_ms > 0 ? (std::floor(t / checkpoint_ms + 1e-9) + 1) * checkpoint_ms : 1e300;
+  long checkpoints_written = 0;
+  auto write_checkpoint = [&] {
+    CheckpointDirectory dir(checkpoint_root);
+    const std::filesystem::path next_dir = dir.begin();
+    fluid.write_checkpoint(next_dir / "fluid.h5");
+    int ok = 1;
+    std::string error;
+    if (is_rank_zero()) {
+      try {
+        StateArchive a;
+        a.put_scalar("scene/time_ms", t);
+        group.export_state(a, "structure/");
+        if (with_ep) {
+          tissue->export_state(a, "ep/");
+          ep_module->export_state(a, "ep_module/");
+          a.put_scalar("ep_module/offset_ms", ep_clock->offset_ms());
+        }
+        scheduler.export_state(a, "scheduler/");
+        for (const auto& [name, v] : series_state) a.put("series/" + name, *v);
+        if (fields) a.put("scene/field_times_ms", fields->frame_times_ms());
+        write_state_file(next_dir / "state.h5", a, fingerprint);
+      } catch (const std::exception& e) {
+        ok = 0;
+        error = e.what();
+      }
+    }
+    MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (!ok) throw std::runtime_error("fsei checkpoint at t = " + std::to_string(t) + " ms: " + error);
+    dir.publish();
+    ++checkpoints_written;
+  };
   const double dt_sample = s.outputs.time_series_interval_ms;
-  double t = 0;
   try {
   while (t < end_ms - 1e-9) {
     // the next sample, clipped at a cap switch (the LA stimulus, the LV stimulus) and at a field
@@ -771,7 +868,14 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       rep.message = m.str();
     }
     control.on_progress(rep);
-    if (control.cancel_requested()) throw Cancelled();
+    if (control.cancel_requested()) {
+      if (checkpoint_ms > 0) write_checkpoint();
+      throw Cancelled();
+    }
+    if (t >= next_checkpoint_ms - 1e-9 && t < end_ms - 1e-9) {
+      write_checkpoint();
+      next_checkpoint_ms = (std::floor(t / checkpoint_ms + 1e-9) + 1) * checkpoint_ms;
+    }
   }
   } catch (const InstabilityError&) {
     // the bodies as they were when the run stopped: the diagnosis in pictures (rank 0 alone,
@@ -822,6 +926,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["aortic_tip_velocity_max_m_s"] = max_of(u_aortic_tips);
   M["aortic_cusps_wss_max_pa"] = max_of(wss_cusps);
   M["simulated_time_ms"] = t;
+  M["resumed_from_ms"] = resume_from ? resumed.scalar("scene/time_ms") : 0.0;  // 0: a run from t = 0
   const auto& st = scheduler.stats();
   const std::size_t fluid_stage = with_ep ? 1 : 0;
   M["fluid_steps"] = static_cast<double>(st.modules[fluid_stage].steps);
@@ -883,6 +988,16 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       m << "the blood inside the aorta, " << aorta_initial_ml << " ml, started at it)";
     result.notes.push_back(m.str());
   }
+  if (resume_from) {
+    std::ostringstream m;
+    m << "resumed from the checkpoint at t = " << resumed.scalar("scene/time_ms") << " ms in " << resume_from->string();
+    if (fields && !fields->earlier_frames_present())
+      m << "; the field frames written before it are not in this output directory (left out of fsei_fields.xmf)";
+    result.notes.push_back(m.str());
+  }
+  if (checkpoints_written > 0)
+    result.notes.push_back(std::to_string(checkpoints_written) + " checkpoints written every " +
+                           std::to_string(checkpoint_ms) + " ms into " + checkpoint_root.string());
   if (!is_rank_zero()) result.notes.clear();
   return result;
 }

@@ -23,6 +23,10 @@
 // fsei.aortic_pressure_ramp_ms > 0 the outer load is ramped from blood at rest instead).
 // Chamber pressures are spatial means over probe spheres inside the LV, LA and aortic root,
 // relative to a probe in the outer fluid (ours: the box's pressure level is arbitrary).
+// Checkpoints (fsei_checkpoint.h): with a RunControl::checkpoint_directory(), the whole coupled
+// state is written there every fsei.checkpoint_interval_ms and on cancel, and a run that finds
+// a checkpoint of the same scenario there resumes from it, bitwise as the straight run;
+// metric resumed_from_ms says where the run started (0: from t = 0).
 #include <string>
 #include <vector>
 
@@ -41,7 +45,8 @@ GridPoints fsei_grid_points(const config::Scenario& scenario);
 
 // Runs scene "fsei" or "fsi" on MPI_COMM_WORLD (the caller has initialised MPI). Throws
 // InputError (geometry outside the box, a grid too coarse for the valves with the minimum,
-// bad settings), InstabilityError (module, place, time) or Cancelled.
+// bad settings, a checkpoint of another scenario or past the run's end), InstabilityError
+// (module, place, time) or Cancelled.
 RunResult run_fsei(const config::Scenario& scenario, RunControl& control);
 
 const std::vector<std::string>& fsei_metric_names();

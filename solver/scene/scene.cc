@@ -12,6 +12,7 @@
 #include "solver/lumped/simulate.h"
 #include "solver/scene/electro_scene.h"
 #include "solver/scene/electromechanics_scene.h"
+#include "solver/scene/fsei_scene.h"
 #include "solver/scene/ibm_scene.h"
 #include "solver/scene/mechanics_scene.h"
 #include "uq/ishigami.h"
@@ -132,6 +133,7 @@ const std::vector<std::string>& metric_names(const std::string& scene) {
   if (scene == "mechanics") return mechanics_metric_names();
   if (scene == "electromechanics") return electromechanics_metric_names();
   if (scene == "ibm") return ibm_metric_names();
+  if (scene == "fsi" || scene == "fsei") return fsei_metric_names();
   return none;
 }
 
@@ -152,6 +154,8 @@ RunResult run(const config::Scenario& scenario, RunControl& control) {
     result = run_ibm(scenario, control);
   } else if (scenario.scene == "electromechanics") {
     result = run_electromechanics(scenario, control);
+  } else if (scenario.scene == "fsi" || scenario.scene == "fsei") {
+    result = run_fsei(scenario, control);
   } else {
     // parse_scenario() already rejects unimplemented scenes; this guards direct callers.
     std::string list;

@@ -28,6 +28,11 @@ class RunControl {
   // The same path on every rank (parallel HDF5 writes one shared file). Empty (the default):
   // the caller keeps no files; requested fields are then not written, with a note.
   virtual std::filesystem::path output_directory() { return {}; }
+  // Where a scene that supports checkpoints (fsi, fsei) keeps them: a directory that outlives
+  // this attempt of the job (a requeued job gets the same one). The scene resumes from a
+  // checkpoint found there and writes new ones into it (fsei.checkpoint_interval_ms). The same
+  // path on every rank. Empty (the default): no checkpoints.
+  virtual std::filesystem::path checkpoint_directory() { return {}; }
 };
 
 // Thrown by run() when RunControl::cancel_requested() said so; nothing is reported.

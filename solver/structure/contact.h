@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "solver/core/state_archive.h"
 #include "solver/structure/shell.h"
 
 namespace systole::structure {
@@ -90,6 +91,15 @@ class BodyGroup {
   // Recomputes the contact loads at the current positions and the bodies' forces (after
   // set_state on a body, or to read the contact state of a configuration).
   void refresh_contact();
+
+  // Checkpoints: every body's positions, velocities and clock, and the contact's memory (the
+  // remembered sides, the positions of the last candidate build, the build count) under
+  // `prefix`. import_state() into a group built from the same meshes and options recomputes
+  // the candidates and the contact forces from them, so the group continues bitwise as the
+  // exporting one would; InputError for a missing entry or another size. Held inputs (loads,
+  // tension, limiter) are the caller's to set again.
+  void export_state(StateArchive& archive, const std::string& prefix) const;
+  void import_state(const StateArchive& archive, const std::string& prefix);
 
   // Contact state at the last evaluation.
   const ContactStats& contact_stats() const { return stats_; }

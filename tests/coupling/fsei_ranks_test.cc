@@ -11,16 +11,13 @@
 // relative difference 6.3e-15 (the box's kinetic energy), printed by the compare run.
 #include <mpi.h>
 
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <map>
 #include <set>
-#include <sstream>
 #include <string>
 
 #include "solver/config/scenario.h"
 #include "solver/scene/fsei_scene.h"
+#include "tests/coupling/run_values.h"
 
 using namespace systole;
 
@@ -32,20 +29,13 @@ class Quiet final : public scene::RunControl {
   bool cancel_requested() override { return false; }
 };
 
-std::map<std::string, double> run_case() {
-  nlohmann::json doc = {{"scene", "electromechanics"},  // parse_scenario does not offer fsi/fsei yet
-                        {"fsei", {{"end_time_ms", 1.0}}},
-                        {"outputs", {{"time_series_interval_ms", 0.2}}}};
-  config::Scenario s = config::parse_scenario(doc);
-  s.scene = "fsi";
+test::RunValues run_case() {
+  const nlohmann::json doc = {{"scene", "fsi"},
+                              {"fsei", {{"end_time_ms", 1.0}}},
+                              {"outputs", {{"time_series_interval_ms", 0.2}}}};
+  const config::Scenario s = config::parse_scenario(doc);
   Quiet control;
-  const RunResult r = scene::run_fsei(s, control);
-  std::map<std::string, double> values;
-  for (const auto& series : r.series)
-    for (std::size_t i = 0; i < series.values.size(); ++i)
-      values[series.name + "[" + std::to_string(i) + "]"] = series.values[i];
-  for (const auto& [name, v] : r.metrics) values["metric:" + name] = v;
-  return values;
+  return test::values_of(scene::run_fsei(s, control));
 }
 
 const std::set<std::string> kNotCompared = {"metric:wall_time_s", "metric:structure_substeps", "metric:fluid_steps",
@@ -65,49 +55,18 @@ int main(int argc, char** argv) {
     const std::string mode = argv[1], file = argv[2];
     const auto values = run_case();
     if (rank == 0 && mode == "write") {
-      std::ofstream out(file);
-      out.precision(17);
-      for (const auto& [name, v] : values) out << name << ' ' << v << '\n';
-      if (!out) throw std::runtime_error("cannot write " + file);
+      test::write_values(file, values);
       std::printf("np %d: wrote %zu values to %s\n", size, values.size(), file.c_str());
     }
     if (rank == 0 && mode == "compare") {
-      std::ifstream in(file);
-      if (!in) throw std::runtime_error("no reference file " + file + " (the np 1 run writes it)");
-      std::map<std::string, double> ref;
-      std::string name;
-      double v = 0;
-      while (in >> name >> v) ref[name] = v;
-      if (ref.size() != values.size())
-        throw std::runtime_error("np 1 gave " + std::to_string(ref.size()) + " values, np " + std::to_string(size) +
-                                 " gave " + std::to_string(values.size()));
-      double worst = 0;
-      std::string worst_name;
-      int compared = 0, bad = 0;
-      for (const auto& [key, a] : ref) {
-        const auto it = values.find(key);
-        if (it == values.end()) throw std::runtime_error("np " + std::to_string(size) + " lacks " + key);
-        const double b = it->second;
-        if (kNotCompared.count(key) || key.find("wall_s") != std::string::npos) {
-          std::printf("  %s: np 1 %.17g, np %d %.17g (not compared)\n", key.c_str(), a, size, b);
-          continue;
-        }
-        ++compared;
-        if (!std::isfinite(a) || !std::isfinite(b)) {
-          ++bad;
-          std::printf("  %s: not finite (np 1 %g, np %d %g)\n", key.c_str(), a, size, b);
-          continue;
-        }
-        const double rel = std::abs(a - b) / (std::abs(a) + 1);
-        if (rel > worst) worst = rel, worst_name = key;
-        if (rel > 1e-12) {
-          ++bad;
-          std::printf("  %s: np 1 %.17g, np %d %.17g (rel %.3g > 1e-12)\n", key.c_str(), a, size, b, rel);
-        }
-      }
+      const auto skip = [](const std::string& key) {
+        return kNotCompared.count(key) > 0 || key.find("wall_s") != std::string::npos;
+      };
+      const test::Comparison c = test::compare_values(test::read_values(file), values, 1e-12, skip, "np 1",
+                                                      "np " + std::to_string(size), true);
       std::printf("np 1 vs np %d: %d values compared, largest |a - b| / (|a| + 1) = %.3g (%s); %d beyond 1e-12\n", size,
-                  compared, worst, worst_name.c_str(), bad);
-      status = bad == 0 && compared > 50 ? 0 : 1;
+                  c.compared, c.worst, c.worst_name.c_str(), c.bad);
+      status = c.bad == 0 && c.compared > 50 ? 0 : 1;
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "fsei_ranks_test (rank %d): %s\n", rank, e.what());

@@ -1,8 +1,7 @@
 // Scenes "fsi"/"fsei" (issue #9, solver/scene/fsei_scene.h): the input checks, and the first
 // milliseconds of the immersed left heart at the coarse preset (a smoke test of the assembly:
-// every body immersed and moving, the tension building LV pressure behind closed valves). The
-// scenes are not offered by the service yet: docs/fsei.md has the status and what stops longer
-// runs.
+// every body immersed and moving, the tension building LV pressure behind closed valves), and
+// the checkpoints' bad input. docs/fsei.md has the status and what stops longer runs.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <unistd.h>
@@ -68,10 +67,8 @@ std::vector<double> read_doubles(const std::filesystem::path& file, const std::s
 }
 
 config::Scenario scenario(const std::string& scene, nlohmann::json doc) {
-  doc["scene"] = "electromechanics";  // parse_scenario does not offer fsi/fsei yet
-  config::Scenario s = config::parse_scenario(doc);
-  s.scene = scene;
-  return s;
+  doc["scene"] = scene;
+  return config::parse_scenario(doc);
 }
 
 std::string error_of(const config::Scenario& s) {
@@ -318,6 +315,55 @@ TEST(FseiScene, AnUnstableStopLeavesTheBodiesFrame) {
   std::vector<hsize_t> dims;
   EXPECT_EQ(read_doubles(dir / "fsei_bodies.h5", "frames/1/lv_positions_mm", dims).size(),
             3 * geometry::build_left_heart(s.geometry, s.fluid).body(geometry::kLvBody).node_count());
+  std::filesystem::remove_all(dir);
+}
+
+// A checkpoint is taken up only by the same scenario (the run's length may differ) and only
+// before the run's end; anything else is refused with what differs (docs/fsei.md).
+class WithCheckpoints final : public RunControl {
+ public:
+  explicit WithCheckpoints(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  void on_progress(const ProgressReport&) override {}
+  bool cancel_requested() override { return false; }
+  std::filesystem::path checkpoint_directory() override { return dir_; }
+
+ private:
+  std::filesystem::path dir_;
+};
+
+TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
+  const auto dir = fresh_directory("checkpoints");
+  auto run = [&](double end_ms, nlohmann::json extra) {
+    nlohmann::json doc = {{"fsei", {{"end_time_ms", end_ms}, {"checkpoint_interval_ms", 0.1}}},
+                          {"outputs", {{"time_series_interval_ms", 0.1}}}};
+    doc.merge_patch(extra);
+    WithCheckpoints control(dir);
+    return run_fsei(scenario("fsi", doc), control);
+  };
+  const RunResult first = run(0.2, nlohmann::json::object());  // a checkpoint at 0.1 ms
+  EXPECT_EQ(first.metrics.at("resumed_from_ms"), 0);
+  ASSERT_TRUE(std::filesystem::exists(dir / "latest" / "state.h5"));
+  // another scenario: refused, naming the parameter, its value there and here
+  try {
+    run(0.2, {{"fluid", {{"cfl", 0.3}}}});
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("belongs to another scenario"), std::string::npos) << m;
+    EXPECT_NE(m.find("fluid.cfl="), std::string::npos) << m;
+  }
+  // a run that ends before the checkpoint: refused
+  try {
+    run(0.05, nlohmann::json::object());
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("past this run's end"), std::string::npos) << e.what();
+  }
+  // the same scenario run longer: resumes at 0.1 ms and goes on to 0.3 ms
+  const RunResult longer = run(0.3, nlohmann::json::object());
+  EXPECT_NEAR(longer.metrics.at("resumed_from_ms"), 0.1, 1e-9);
+  EXPECT_NEAR(longer.metrics.at("simulated_time_ms"), 0.3, 1e-9);
+  EXPECT_EQ(longer.series.front().values.size(), 4u);  // 0, 0.1 (from the checkpoint), 0.2, 0.3 ms
   std::filesystem::remove_all(dir);
 }
 

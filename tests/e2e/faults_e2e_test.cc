@@ -64,6 +64,37 @@ TEST(FaultsE2E, KilledWorkerJobIsRequeuedAndCompletes) {
   fs::remove_all(dir);
 }
 
+TEST(FaultsE2E, KilledWorkerFsiJobResumesFromItsCheckpoint) {
+  // Scene fsi checkpoints into the server's data dir (the local workers' --checkpoint-dir); a
+  // worker killed after a checkpoint leaves it, and the requeued job resumes from it instead of
+  // starting over (issue #9). The first 3 ms of the coarse heart, a checkpoint every 0.5 ms.
+  const fs::path dir = make_temp_dir("killfsi");
+  {
+    ServerProcess server(dir, 1, 2, /*lease_ms=*/3000);
+    const nlohmann::json scenario{{"scene", "fsi"},
+                                  {"fsei", {{"end_time_ms", 3}, {"checkpoint_interval_ms", 0.5}}},
+                                  {"outputs", {{"time_series_interval_ms", 0.5}}}};
+    const std::string id = submit(server, scenario);
+    const fs::path checkpoint = dir / "data" / "checkpoints" / id / "latest" / "state.h5";
+    ASSERT_TRUE(wait_until([&] { return fs::exists(checkpoint); }, seconds(120), milliseconds(100))) << server.log();
+    const auto pids = server.worker_pids();
+    ASSERT_FALSE(pids.empty()) << "no worker process found";
+    for (pid_t pid : pids) ::kill(pid, SIGKILL);
+    ASSERT_TRUE(wait_for_state(server, id, v1::SUCCEEDED, seconds(240))) << server.log();
+    EXPECT_EQ(get_job(server, id).attempts(), 2);
+    v1::GetResultRequest request;
+    request.set_id(id);
+    v1::Result result;
+    auto context = deadline_context();
+    ASSERT_TRUE(server.stub().GetResult(context.get(), request, &result).ok());
+    EXPECT_GT(result.metrics().at("resumed_from_ms"), 0.0);
+    EXPECT_EQ(result.metrics().at("simulated_time_ms"), 3.0);
+    // a finished job's checkpoints are removed
+    EXPECT_FALSE(fs::exists(dir / "data" / "checkpoints" / id));
+  }
+  fs::remove_all(dir);
+}
+
 TEST(FaultsE2E, KilledServerKeepsEveryJobAndResult) {
   const fs::path dir = make_temp_dir("killserver");
   std::string done_id, running_id, queued_id, done_sha;

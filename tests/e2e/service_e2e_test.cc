@@ -2,6 +2,8 @@
 // gRPC, REST and the CLI. Physiology of the 0-D scene itself is tested in tests/lumped.
 #include <httplib.h>
 
+#include <cmath>
+
 #include "service/server/sha256.h"
 #include "tests/e2e/harness.h"
 
@@ -123,6 +125,27 @@ TEST_F(ServiceE2E, ElectromechanicsJobRunsOnTheWorkersWithPerBeatMetricsAndField
     EXPECT_TRUE(names.count(f)) << f;
 }
 
+TEST_F(ServiceE2E, FsiJobRunsOnTheWorkersWithChamberMetricsAndFields) {
+  // Scene "fsi" through the service (issue #9): the first millisecond of the coarse heart in
+  // blood, fields every 0.5 ms. The physics of the scene is tested in tests/coupling.
+  const nlohmann::json scenario{{"scene", "fsi"}, {"fsei", {{"end_time_ms", 1}, {"field_interval_ms", 0.5}}}};
+  const std::string id = submit(*server_, scenario);
+  ASSERT_TRUE(wait_for_state(*server_, id, v1::SUCCEEDED, std::chrono::seconds(300))) << server_->log();
+  v1::GetResultRequest request;
+  request.set_id(id);
+  v1::Result result;
+  auto context = deadline_context();
+  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  for (const char* key : {"lv_pressure_max_mmhg", "aortic_root_pressure_max_mmhg", "lv_volume_end_ml",
+                          "aortic_cusps_wss_max_pa", "wall_time_s"})
+    EXPECT_TRUE(result.metrics().contains(key)) << key;
+  for (const auto& [key, value] : result.metrics()) EXPECT_TRUE(std::isfinite(value)) << key;
+  std::set<std::string> names;
+  for (const auto& a : result.artifacts()) names.insert(a.name());
+  for (const char* f : {"metrics.json", "result.h5", "time_series.csv", "fsei_bodies.h5", "fsei_fields.xmf"})
+    EXPECT_TRUE(names.count(f)) << f;
+}
+
 TEST_F(ServiceE2E, WatchStreamsStatesInOrderAndResumes) {
   const std::string id = submit(*server_, {{"scene", "lumped"}, {"beats", 5}, {"periodicity_tolerance", 0}});
   std::vector<v1::JobEvent> events;
@@ -207,7 +230,7 @@ TEST_F(ServiceE2E, BadInputGetsClearErrorsAndChangesNothing) {
   EXPECT_EQ(r->status, 400);
   EXPECT_NE(r->body.find("heart_rate_bpm = 400 is out of range [20, 240]"), std::string::npos) << r->body;
   // Unimplemented scene: an error, not a fallback.
-  r = http.Post("/v1/jobs", R"({"scenario": {"scene": "fsei"}})", "application/json");
+  r = http.Post("/v1/jobs", R"({"scenario": {"scene": "geometry"}})", "application/json");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 400);
   EXPECT_NE(r->body.find("not implemented"), std::string::npos) << r->body;

@@ -383,7 +383,9 @@ TEST(Heart, CommissureHeightIsCheckedAndZeroGivesTheFlatCusps) {
   EXPECT_EQ(flat.layout.aortic_crown_height_mm, 0);
   for (const auto& b : flat.bodies)
     for (std::size_t i = 0; i < b.node_count(); ++i)
-      if (b.region[i] & kAnchor) EXPECT_NEAR(b.position_mm[i].z(), flat.plane.z_mm, 1e-9) << b.name;
+      if (b.region[i] & kAnchor) {
+        EXPECT_NEAR(b.position_mm[i].z(), flat.plane.z_mm, 1e-9) << b.name;
+      }
 }
 
 TEST(Heart, BoxTooSmallIsRejectedNamingTheBox) {

@@ -115,8 +115,11 @@ TEST(Config, CrossFieldRules) {
 }
 
 TEST(Config, UnimplementedSceneIsAnErrorNotAFallback) {
-  const std::string e = error_of({{"scene", "fsei"}});
-  EXPECT_NE(e.find("scene 'fsei' is not implemented yet; implemented: lumped, analytic, fluid, electro, mechanics, ibm, electromechanics"), std::string::npos) << e;
+  const std::string e = error_of({{"scene", "geometry"}});
+  EXPECT_NE(e.find("scene 'geometry' is not implemented yet; implemented: lumped, analytic, fluid, electro, mechanics, "
+                   "ibm, electromechanics, fsi, fsei"),
+            std::string::npos)
+      << e;
   EXPECT_NE(error_of({{"scene", "warp"}}).find("unknown scene 'warp'; known: lumped"), std::string::npos);
 }
 

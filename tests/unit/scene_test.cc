@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "solver/config/scenario.h"
+#include "solver/scene/fsei_scene.h"
 #include "solver/scene/scene.h"
 
 namespace systole::scene {
@@ -52,7 +53,9 @@ TEST(Scene, AdvertisedMetricsAreProduced) {
     for (const auto& name : metric_names(scene)) EXPECT_TRUE(r.metrics.count(name)) << scene << ": " << name;
     EXPECT_GE(control.reports, 1);
   }
-  EXPECT_TRUE(metric_names("fsei").empty());
+  EXPECT_TRUE(metric_names("geometry").empty());
+  EXPECT_EQ(metric_names("fsei"), fsei_metric_names());
+  EXPECT_EQ(metric_names("fsi"), fsei_metric_names());
 }
 
 TEST(Scene, AnalyticIshigamiAtKnownPoints) {
