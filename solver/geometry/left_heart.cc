@@ -872,12 +872,23 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
       f2 = f1.cross(tt);  // (x, y) at the root, where the tangent is -z
     };
     auto curve = [&](double s) { return Vec2(s, mean_radius(s)); };
-    const auto st = meridian_stations(curve, 0, s_end, 0.866 * h, 8);
+    // Rings at 0.866 h along the meridian before and after the arch, one at each end of it. The
+    // arch itself is meshed by longitudinal lines (ours): rings there would all pass through the
+    // bend's axis, so the wall between two of them would be (R - r)/R of their spacing at the
+    // intrados and (R + r)/R at the extrados (0.58 and 2.9 mm at the defaults, R/r = 1.5; the
+    // short intrados edges crumpled in the coupled runs). Instead the line from node i of the
+    // arch's first ring to node i of its last (the same angle in the transported frame) gets
+    // nodes 0.866 h apart along its own length, and neighbouring lines are stitched in order of
+    // the centreline coordinate s.
+    std::vector<double> st = meridian_stations(curve, 0, s_arch0, 0.866 * h, 4);
+    const std::vector<double> st_after = meridian_stations(curve, s_arch1, s_end, 0.866 * h, 4);
+    st.insert(st.end(), st_after.begin(), st_after.end());
     std::vector<Tri> tris;
-    std::vector<int> tri_ring;
-    std::vector<double> ring_s;
+    std::vector<double> tri_s;  // the centreline coordinate of every triangle
+    std::vector<double> node_s;  // of every node
     Ring prev = copy_ring(aorta, plane, aortic_ring, kAnchor | kAorticAnnulus);
-    ring_s.push_back(0);
+    node_s.assign(aorta.node_count(), 0.0);
+    double s_prev = 0;
     for (std::size_t k = 1; k < st.size(); ++k) {
       const double s = st[k];
       Vec3 f1, f2;
@@ -885,25 +896,84 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
       const std::uint32_t tags = s >= s_outflow - 1e-9 ? kOutflow : kRegionNone;
       Ring ring = add_ring(aorta, ring_count(mean_radius(s), h), centre(s), f1, f2,
                            [&](double th) { return radius(s, th); }, tags);
+      node_s.resize(aorta.node_count(), s);
       if (s <= s_arch0)  // at the root the frame is (x, y): ring angles are azimuths about A
         for (std::size_t i = 0; i < ring.node.size(); ++i)
           if (s <= crown_hold_height(ring.angle[i])) aorta.region[ring.node[i]] |= kAnchor | kAorticAnnulus;
       const std::size_t before = tris.size();
-      detail::stitch_rings(prev, ring, tris);
-      tri_ring.insert(tri_ring.end(), tris.size() - before, static_cast<int>(k - 1));
-      ring_s.push_back(s);
+      if (s_prev == s_arch0 && s == s_arch1) {
+        // the arch: ring prev (at s_arch0) to ring (at s_arch1), both of the tube's radius and
+        // the same node count (ring_count(r_arch, h)), node i of each at the same angle
+        const std::size_t n = ring.node.size();
+        std::vector<std::vector<std::int32_t>> line(n);
+        std::vector<std::vector<double>> line_s(n);
+        const int dense = 400;
+        for (std::size_t i = 0; i < n; ++i) {
+          const double th = ring.angle[i];
+          auto point = [&](double sa) {
+            Vec3 e1, e2;
+            frame(sa, e1, e2);
+            return Vec3(centre(sa) + r_arch * (std::cos(th) * e1 + std::sin(th) * e2));
+          };
+          std::vector<double> param(dense + 1), arc(dense + 1, 0.0);
+          for (int q = 0; q <= dense; ++q) {
+            param[q] = s_arch0 + (s_arch1 - s_arch0) * q / dense;
+            if (q) arc[q] = arc[q - 1] + (point(param[q]) - point(param[q - 1])).norm();
+          }
+          const int segments = std::max(1, static_cast<int>(std::lround(arc.back() / (0.866 * h))));
+          const std::vector<double> at = detail::equal_arclength_stations(param, arc, segments);
+          line[i].push_back(prev.node[i]);
+          line_s[i].push_back(s_arch0);
+          for (int q = 1; q < segments; ++q) {
+            line[i].push_back(aorta.add_node(point(at[q]), kRegionNone));
+            line_s[i].push_back(at[q]);
+            node_s.push_back(at[q]);
+          }
+          line[i].push_back(ring.node[i]);
+          line_s[i].push_back(s_arch1);
+        }
+        for (std::size_t i = 0; i < n; ++i) {  // the strip between line i and line i + 1
+          const auto& a = line[i];
+          const auto& b = line[(i + 1) % n];
+          const auto& sa = line_s[i];
+          const auto& sb = line_s[(i + 1) % n];
+          std::size_t p = 0, q = 0;
+          while (p + 1 < a.size() || q + 1 < b.size()) {
+            const bool along_a = q + 1 >= b.size() || (p + 1 < a.size() && sa[p + 1] <= sb[q + 1]);
+            if (along_a) {
+              tris.push_back({a[p], a[p + 1], b[q]});
+              ++p;
+            } else {
+              tris.push_back({a[p], b[q + 1], b[q]});
+              ++q;
+            }
+          }
+        }
+      } else {
+        detail::stitch_rings(prev, ring, tris);
+      }
+      for (std::size_t t = before; t < tris.size(); ++t)
+        tri_s.push_back((node_s[tris[t][0]] + node_s[tris[t][1]] + node_s[tris[t][2]]) / 3);
+      s_prev = s;
       prev = std::move(ring);
+    }
+    // every triangle's normal away from the centreline (the rings' bands are so by
+    // construction; the arch's strips are made so here), then all into the lumen below
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const Vec3& x0 = aorta.position_mm[tris[t][0]];
+      const Vec3 nrm = (aorta.position_mm[tris[t][1]] - x0).cross(aorta.position_mm[tris[t][2]] - x0);
+      const Vec3 mid = (x0 + aorta.position_mm[tris[t][1]] + aorta.position_mm[tris[t][2]]) / 3;
+      if (nrm.dot(mid - centre(tri_s[t])) < 0) std::swap(tris[t][1], tris[t][2]);
     }
     add_triangles(aorta, tris, Tissue::kAorticWall, g.aorta_wall_mm);
     // Orientation: normals into the lumen.
     {
       const std::size_t tr = aorta.triangle_count() / 2;
-      const double s = 0.5 * (ring_s[tri_ring[tr]] + ring_s[tri_ring[tr] + 1]);
-      if (aorta.unit_normal(tr).dot(centre(s) - aorta.centroid(tr)) < 0) aorta.flip_orientation();
+      if (aorta.unit_normal(tr).dot(centre(tri_s[tr]) - aorta.centroid(tr)) < 0) aorta.flip_orientation();
     }
     // Fibres: circumferential about the local centreline.
     for (std::size_t tr = 0; tr < aorta.triangle_count(); ++tr) {
-      const double s = 0.5 * (ring_s[tri_ring[tr]] + ring_s[tri_ring[tr] + 1]);
+      const double s = tri_s[tr];
       const Vec3 circ = tangent(s).cross(aorta.centroid(tr) - centre(s));
       aorta.fibre[tr] = tangent_in_triangle(aorta, tr, circ, Vec3::UnitX());
     }
