@@ -258,7 +258,8 @@ const std::vector<std::string>& fsei_metric_names() {
       "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
       "lv_volume_balance_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
       "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "aortic_cusps_wss_max_pa", "simulated_time_ms", "fluid_steps", "structure_substeps",
-      "ep_steps", "coupling_intervals", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
+      "ep_steps", "coupling_intervals", "coupling_passes", "coupling_unconverged_intervals",
+      "coupling_max_final_residual", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
       "ep_wall_s",
       "fluid_wall_s", "structure_wall_s", "resumed_from_ms", "wall_time_s"};
   return names;
@@ -865,6 +866,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       m << s.scene << " t_ms " << t << " p_lv_mmhg " << p_lv.back() << " p_la_mmhg " << p_la.back() << " p_ao_mmhg "
         << p_ao.back() << " v_lv_ml " << v_lv.back() << " v_la_ml " << v_la.back() << " q_ao_ml_s " << q_ao.back()
         << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back();
+      if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
+        const coupling::SchedulerStats& cs = scheduler.stats();
+        m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals
+          << " intervals, largest final residual " << cs.max_final_residual;
+      }
       rep.message = m.str();
     }
     control.on_progress(rep);
@@ -933,6 +939,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["structure_substeps"] = static_cast<double>(st.modules[fluid_stage + 1].steps);
   M["ep_steps"] = with_ep ? static_cast<double>(st.modules[0].steps + std::lround(s.av_delay_ms / s.electro.time_step_ms)) : 0.0;
   M["coupling_intervals"] = static_cast<double>(st.intervals);
+  // strong coupling: passes in all (= intervals when loose), intervals that ended at the pass
+  // limit, and the largest relative change of the transferred data at an interval's end
+  M["coupling_passes"] = static_cast<double>(st.passes);
+  M["coupling_unconverged_intervals"] = static_cast<double>(st.unconverged_intervals);
+  M["coupling_max_final_residual"] = st.max_final_residual;
   double over = 0;
   for (const auto& m : st.modules) over = std::max(over, m.max_step_over_limit);
   M["max_step_over_limit"] = over;

@@ -134,6 +134,9 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   EXPECT_LE(r.metrics.at("max_step_over_limit"), 1 + 1e-12);
   EXPECT_GE(r.metrics.at("fluid_steps"), r.metrics.at("coupling_intervals"));
   EXPECT_GT(r.metrics.at("structure_substeps"), r.metrics.at("coupling_intervals"));
+  // loose coupling: one pass per interval, nothing to converge
+  EXPECT_EQ(r.metrics.at("coupling_passes"), r.metrics.at("coupling_intervals"));
+  EXPECT_EQ(r.metrics.at("coupling_unconverged_intervals"), 0);
   // The LV pressure rises from 0 at every sample and leads the LA and the aortic root.
   const auto& p_lv = r.series.at(1).values;
   ASSERT_EQ(r.series.at(1).name, "lv_pressure_mmhg");
