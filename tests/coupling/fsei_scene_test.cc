@@ -28,15 +28,19 @@ class Quiet final : public RunControl {
   int reports = 0;
 };
 
+// A caller that keeps the run's files in `output` and its checkpoints in `checkpoint` (empty:
+// none).
 class ToDirectory final : public RunControl {
  public:
-  explicit ToDirectory(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  explicit ToDirectory(std::filesystem::path output, std::filesystem::path checkpoint = {})
+      : output_(std::move(output)), checkpoint_(std::move(checkpoint)) {}
   void on_progress(const ProgressReport&) override {}
   bool cancel_requested() override { return false; }
-  std::filesystem::path output_directory() override { return dir_; }
+  std::filesystem::path output_directory() override { return output_; }
+  std::filesystem::path checkpoint_directory() override { return checkpoint_; }
 
  private:
-  std::filesystem::path dir_;
+  std::filesystem::path output_, checkpoint_;
 };
 
 std::filesystem::path fresh_directory(const std::string& name) {
@@ -323,24 +327,13 @@ TEST(FseiScene, AnUnstableStopLeavesTheBodiesFrame) {
 
 // A checkpoint is taken up only by the same scenario (the run's length may differ) and only
 // before the run's end; anything else is refused with what differs (docs/fsei.md).
-class WithCheckpoints final : public RunControl {
- public:
-  explicit WithCheckpoints(std::filesystem::path dir) : dir_(std::move(dir)) {}
-  void on_progress(const ProgressReport&) override {}
-  bool cancel_requested() override { return false; }
-  std::filesystem::path checkpoint_directory() override { return dir_; }
-
- private:
-  std::filesystem::path dir_;
-};
-
 TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   const auto dir = fresh_directory("checkpoints");
   auto run = [&](double end_ms, nlohmann::json extra) {
     nlohmann::json doc = {{"fsei", {{"end_time_ms", end_ms}, {"checkpoint_interval_ms", 0.1}}},
                           {"outputs", {{"time_series_interval_ms", 0.1}}}};
     doc.merge_patch(extra);
-    WithCheckpoints control(dir);
+    ToDirectory control({}, dir);
     return run_fsei(scenario("fsi", doc), control);
   };
   const RunResult first = run(0.2, nlohmann::json::object());  // a checkpoint at 0.1 ms

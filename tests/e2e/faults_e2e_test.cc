@@ -82,11 +82,7 @@ TEST(FaultsE2E, KilledWorkerFsiJobResumesFromItsCheckpoint) {
     for (pid_t pid : pids) ::kill(pid, SIGKILL);
     ASSERT_TRUE(wait_for_state(server, id, v1::SUCCEEDED, seconds(240))) << server.log();
     EXPECT_EQ(get_job(server, id).attempts(), 2);
-    v1::GetResultRequest request;
-    request.set_id(id);
-    v1::Result result;
-    auto context = deadline_context();
-    ASSERT_TRUE(server.stub().GetResult(context.get(), request, &result).ok());
+    const v1::Result result = get_result(server, id);
     EXPECT_GT(result.metrics().at("resumed_from_ms"), 0.0);
     EXPECT_EQ(result.metrics().at("simulated_time_ms"), 3.0);
     // a finished job's checkpoints are removed
@@ -106,11 +102,7 @@ TEST(FaultsE2E, KilledServerKeepsEveryJobAndResult) {
     queued_id = submit(server, {{"scene", "lumped"}, {"beats", 2}, {"periodicity_tolerance", 0}});
     ASSERT_TRUE(wait_until([&] { return has_progress(server, running_id); }, seconds(60), milliseconds(100)));
     EXPECT_EQ(get_job(server, queued_id).state(), v1::QUEUED);
-    v1::GetResultRequest request;
-    request.set_id(done_id);
-    v1::Result result;
-    auto context = deadline_context();
-    ASSERT_TRUE(server.stub().GetResult(context.get(), request, &result).ok());
+    const v1::Result result = get_result(server, done_id);
     for (const auto& a : result.artifacts())
       if (a.name() == "result.h5") done_sha = a.sha256();
     ASSERT_FALSE(done_sha.empty());

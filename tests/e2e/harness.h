@@ -165,6 +165,17 @@ inline v1::Job get_job(ServerProcess& server, const std::string& id) {
   return job;
 }
 
+// A job's result; throws (failing the calling test) when the server does not give it.
+inline v1::Result get_result(ServerProcess& server, const std::string& id) {
+  v1::GetResultRequest request;
+  request.set_id(id);
+  v1::Result result;
+  auto context = deadline_context();
+  const auto status = server.stub().GetResult(context.get(), request, &result);
+  if (!status.ok()) throw std::runtime_error("GetResult: " + status.error_message());
+  return result;
+}
+
 inline bool wait_for_state(ServerProcess& server, const std::string& id, v1::JobState state,
                            std::chrono::milliseconds timeout) {
   return wait_until([&] { return get_job(server, id).state() == state; }, timeout, std::chrono::milliseconds(100));

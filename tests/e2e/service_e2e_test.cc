@@ -44,11 +44,7 @@ int64_t job_count(ServerProcess& server) {
 TEST_F(ServiceE2E, HealthyJobSucceedsWithResultsAndVerifiedArtifacts) {
   const std::string id = submit(*server_, {{"scene", "lumped"}});
   ASSERT_TRUE(wait_for_state(*server_, id, v1::SUCCEEDED, std::chrono::seconds(60))) << server_->log();
-  v1::GetResultRequest request;
-  request.set_id(id);
-  v1::Result result;
-  auto context = deadline_context();
-  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  const v1::Result result = get_result(*server_, id);
   for (const char* key : {"ejection_fraction_percent", "cardiac_output_l_min", "stroke_volume_ml", "edv_ml", "esv_ml",
                           "lv_peak_pressure_mmhg", "aortic_pressure_max_mmhg", "aortic_pressure_min_mmhg",
                           "heart_rate_bpm", "beats_simulated", "wall_time_s"})
@@ -108,11 +104,7 @@ TEST_F(ServiceE2E, ElectromechanicsJobRunsOnTheWorkersWithPerBeatMetricsAndField
                                 {"electromechanics", {{"la_chamber", "lumped"}, {"field_interval_ms", 50}}}};
   const std::string id = submit(*server_, scenario);
   ASSERT_TRUE(wait_for_state(*server_, id, v1::SUCCEEDED, std::chrono::seconds(300))) << server_->log();
-  v1::GetResultRequest request;
-  request.set_id(id);
-  v1::Result result;
-  auto context = deadline_context();
-  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  const v1::Result result = get_result(*server_, id);
   for (const char* key : {"ejection_fraction_percent", "cardiac_output_l_min", "lv_peak_pressure_mmhg",
                           "lv_twist_end_systole_deg", "global_longitudinal_strain_percent", "max_volume_mismatch_ml",
                           "beats_simulated", "wall_time_s"})
@@ -131,11 +123,7 @@ TEST_F(ServiceE2E, FsiJobRunsOnTheWorkersWithChamberMetricsAndFields) {
   const nlohmann::json scenario{{"scene", "fsi"}, {"fsei", {{"end_time_ms", 1}, {"field_interval_ms", 0.5}}}};
   const std::string id = submit(*server_, scenario);
   ASSERT_TRUE(wait_for_state(*server_, id, v1::SUCCEEDED, std::chrono::seconds(300))) << server_->log();
-  v1::GetResultRequest request;
-  request.set_id(id);
-  v1::Result result;
-  auto context = deadline_context();
-  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  const v1::Result result = get_result(*server_, id);
   for (const char* key : {"lv_pressure_max_mmhg", "aortic_root_pressure_max_mmhg", "lv_volume_end_ml",
                           "aortic_cusps_wss_max_pa", "wall_time_s"})
     EXPECT_TRUE(result.metrics().contains(key)) << key;
@@ -329,11 +317,7 @@ TEST_F(ServiceE2E, IdenticalScenarioReusesTheFinishedResultUnlessNoCache) {
   EXPECT_EQ(cached.state(), v1::SUCCEEDED);
   EXPECT_EQ(cached.cached_from(), first);
   EXPECT_EQ(cached.attempts(), 0);  // never ran
-  v1::GetResultRequest request;
-  request.set_id(again);
-  v1::Result result;
-  auto context = deadline_context();
-  ASSERT_TRUE(server_->stub().GetResult(context.get(), request, &result).ok());
+  const v1::Result result = get_result(*server_, again);
   EXPECT_EQ(result.artifacts_size(), 4);  // result.h5, metrics.json, time_series.csv, pv_loop.csv
   // no_cache runs it again.
   v1::SubmitJobRequest fresh;
