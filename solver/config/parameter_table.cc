@@ -364,6 +364,14 @@ std::vector<Param> build_table() {
                                     "Strong coupling: relative change of the transferred data between passes."));
   t.push_back(SYSTOLE_INT(coupling.strong_max_iterations, "", 4, 1, 50,
                           "Strong coupling: most iterations per step."));
+  t.push_back(SYSTOLE_CHOICE(coupling.relaxation, "aitken",
+                             (std::vector<std::string_view>{"aitken", "iqn_ils", "constant", "none"}),
+                             "Scenes fsi/fsei, strong coupling: how the hydrodynamic loads are relaxed between "
+                             "passes: Aitken's dynamic factor, interface quasi-Newton IQN-ILS (secant columns "
+                             "reused across intervals), a constant factor 0.5, or none (docs/fsei.md)."));
+  t.push_back(SYSTOLE_INT(coupling.iqn_reuse_intervals, "", 8, 0, 100,
+                          "Scenes fsi/fsei, relaxation iqn_ils: earlier synchronisation intervals whose "
+                          "secant columns are reused (0: this interval's only)."));
   // --- outputs ---------------------------------------------------------------------------
   t.push_back(SYSTOLE_BOOL(outputs.metrics, true, "Write per-beat metrics."));
   t.push_back(SYSTOLE_BOOL(outputs.time_series, true, "Write pressure/volume/flow time series."));

@@ -118,6 +118,8 @@ struct Coupling {
   std::string mode;
   double strong_tolerance;
   int strong_max_iterations;
+  std::string relaxation;
+  int iqn_reuse_intervals;
 };
 
 struct Outputs {

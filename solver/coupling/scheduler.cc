@@ -33,6 +33,8 @@ void validate(const SchedulerOptions& o) {
   if (o.strong_max_iterations < 1) range("strong_max_iterations", o.strong_max_iterations, "[1, inf)");
   if (!(o.relaxation_factor > 0 && o.relaxation_factor <= 1))
     range("relaxation_factor", o.relaxation_factor, "(0, 1]");
+  if (o.iqn_reuse_intervals < 0) range("iqn_reuse_intervals", o.iqn_reuse_intervals, "[0, inf)");
+  if (!(o.iqn_filter > 0 && o.iqn_filter < 1)) range("iqn_filter", o.iqn_filter, "(0, 1)");
   if (!(o.min_step_ms > 0)) range("min_step_ms", o.min_step_ms, "(0, inf)");
   if (!(o.step_limit_factor > 0) || !std::isfinite(o.step_limit_factor))
     range("step_limit_factor", o.step_limit_factor, "(0, inf)");
@@ -60,6 +62,7 @@ Scheduler::Scheduler(std::vector<Stage> stages, SchedulerOptions options)
   previous_.resize(transfers);
   previous_residual_.resize(transfers);
   aitken_.assign(transfers, options_.relaxation_factor);
+  iqn_.resize(transfers);
 }
 
 void Scheduler::sub_cycle(std::size_t stage, double t_end_ms) {
@@ -93,7 +96,7 @@ void Scheduler::sub_cycle(std::size_t stage, double t_end_ms) {
 // pass number `iteration` of this interval; each transfer's raw data x̃_k is relaxed,
 //   x_k = x_{k-1} + ω_k (x̃_k − x_{k-1})   (x_0 = x̃_0: the first pass is a loose step),
 // ω constant, or Aitken's Δ² (Küttler & Wall 2008, Comput. Mech. 43:61) per transfer (ours),
-// and x_k written. Returns max over transfers of |x̃_k − x_{k-1}| / |x̃_k| (0 for pass 0).
+// or IQN-ILS (below), and x_k written. Returns max over transfers of |x̃_k − x_{k-1}| / |x̃_k| (0 for pass 0).
 double Scheduler::run_pass(double t_end_ms, int iteration) {
   double worst = 0;
   std::size_t k = 0;
@@ -121,6 +124,15 @@ double Scheduler::relax(std::size_t k, bool relaxed_transfer, int iteration) {
   std::vector<double>& last_residual = previous_residual_[k];
   if (iteration == 0 || x.size() != raw.size()) {
     const double change = iteration == 0 ? 0.0 : 1.0;  // data that changed size: not converged
+    QuasiNewtonMemory& m = iqn_[k];
+    if (x.size() != raw.size() && !x.empty()) {
+      m = QuasiNewtonMemory{};  // columns of another length are of no use
+    } else if (iteration == 0 && !m.current.residual_differences.empty()) {
+      if (options_.iqn_reuse_intervals > 0) m.earlier.insert(m.earlier.begin(), std::move(m.current));
+      if (m.earlier.size() > static_cast<std::size_t>(options_.iqn_reuse_intervals))
+        m.earlier.resize(static_cast<std::size_t>(options_.iqn_reuse_intervals));
+      m.current = SecantColumns{};
+    }
     x = raw;
     last_residual.assign(raw.size(), 0.0);
     aitken_[k] = options_.relaxation_factor;
@@ -129,6 +141,11 @@ double Scheduler::relax(std::size_t k, bool relaxed_transfer, int iteration) {
   std::vector<double> r(raw.size());
   for (std::size_t i = 0; i < raw.size(); ++i) r[i] = raw[i] - x[i];
   const double change = norm(r) / std::max(norm(raw), 1e-300);
+  if (relaxed_transfer && options_.relaxation == Relaxation::iqn_ils) {
+    quasi_newton(k, raw, r, iteration);
+    last_residual = r;
+    return change;
+  }
   double omega = 1;
   if (relaxed_transfer && options_.relaxation != Relaxation::none) {
     omega = options_.relaxation_factor;
@@ -150,6 +167,74 @@ double Scheduler::relax(std::size_t k, bool relaxed_transfer, int iteration) {
   return change;
 }
 
+// IQN-ILS (Degroote, Bathe & Vierendeels 2009, Comput. Struct. 87:793), with the columns of
+// earlier intervals reused: the fixed-point map x -> x̃ = H(x) has residual r = x̃ − x. From
+// passes i, i+1 the secant pairs Δr = r_{i+1} − r_i, Δx̃ = x̃_{i+1} − x̃_i form the columns of
+// V and W (this interval's newest first, then earlier intervals'). The least-squares
+// c = argmin |V c + r_k| predicts the r = 0 point, and
+//   x_{k+1} = x̃_k + W c;
+// without any column, x_{k+1} = x_k + ω r_k (ω = relaxation_factor). V is orthogonalised by
+// modified Gram–Schmidt in that order, dropping a column whose part orthogonal to the kept
+// ones is below iqn_filter times its norm (nearly dependent: it would make c wild). All ranks
+// hold the same data, so all compute the same update.
+void Scheduler::quasi_newton(std::size_t k, const std::vector<double>& raw, const std::vector<double>& r,
+                             int iteration) {
+  QuasiNewtonMemory& m = iqn_[k];
+  std::vector<double>& x = previous_[k];
+  const std::size_t n = raw.size();
+  if (iteration >= 2 && m.last_raw.size() == n) {
+    std::vector<double> dr(n), dx(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      dr[i] = r[i] - previous_residual_[k][i];
+      dx[i] = raw[i] - m.last_raw[i];
+    }
+    m.current.residual_differences.insert(m.current.residual_differences.begin(), std::move(dr));
+    m.current.raw_differences.insert(m.current.raw_differences.begin(), std::move(dx));
+  }
+  m.last_raw = raw;
+  // Q R = V (kept columns), with the matching columns of W
+  std::vector<std::vector<double>> q;
+  std::vector<std::vector<double>> r_columns;  // column j of R: j + 1 entries
+  std::vector<const std::vector<double>*> w;
+  auto offer = [&](const std::vector<double>& v, const std::vector<double>& wv) {
+    const double v_norm = norm(v);
+    if (!(v_norm > 0) || !std::isfinite(v_norm)) return;
+    std::vector<double> u = v;
+    std::vector<double> rc(q.size() + 1);
+    for (std::size_t j = 0; j < q.size(); ++j) {
+      rc[j] = std::inner_product(q[j].begin(), q[j].end(), u.begin(), 0.0);
+      for (std::size_t i = 0; i < n; ++i) u[i] -= rc[j] * q[j][i];
+    }
+    const double u_norm = norm(u);
+    if (u_norm < options_.iqn_filter * v_norm) return;
+    for (double& e : u) e /= u_norm;
+    rc.back() = u_norm;
+    q.push_back(std::move(u));
+    r_columns.push_back(std::move(rc));
+    w.push_back(&wv);
+  };
+  for (std::size_t j = 0; j < m.current.residual_differences.size() && q.size() < n; ++j)
+    offer(m.current.residual_differences[j], m.current.raw_differences[j]);
+  for (const SecantColumns& e : m.earlier)
+    for (std::size_t j = 0; j < e.residual_differences.size() && q.size() < n; ++j)
+      offer(e.residual_differences[j], e.raw_differences[j]);
+  if (q.empty()) {
+    for (std::size_t i = 0; i < n; ++i) x[i] += options_.relaxation_factor * r[i];
+    return;
+  }
+  // R c = −Qᵀ r by back substitution
+  const std::size_t cols = q.size();
+  std::vector<double> c(cols);
+  for (std::size_t j = 0; j < cols; ++j) c[j] = -std::inner_product(q[j].begin(), q[j].end(), r.begin(), 0.0);
+  for (std::size_t j = cols; j-- > 0;) {
+    for (std::size_t l = j + 1; l < cols; ++l) c[j] -= r_columns[l][j] * c[l];
+    c[j] /= r_columns[j][j];
+  }
+  x = raw;
+  for (std::size_t j = 0; j < cols; ++j)
+    for (std::size_t i = 0; i < n; ++i) x[i] += c[j] * (*w[j])[i];
+}
+
 void Scheduler::export_state(StateArchive& a, const std::string& prefix) const {
   a.put_scalar(prefix + "time_ms", time_ms_);
   a.put(prefix + "counts", {static_cast<double>(stats_.intervals), static_cast<double>(stats_.passes),
@@ -158,6 +243,26 @@ void Scheduler::export_state(StateArchive& a, const std::string& prefix) const {
   for (const ModuleStats& s : stats_.modules)
     m.insert(m.end(), {static_cast<double>(s.steps), s.min_step_ms, s.max_step_ms, s.max_step_over_limit, s.wall_time_s});
   a.put(prefix + "modules", m);
+  // IQN-ILS's secant columns (the next interval reuses them): per transfer, the column count of
+  // each interval (newest first) and the columns concatenated
+  for (std::size_t k = 0; k < iqn_.size(); ++k) {
+    const QuasiNewtonMemory& q = iqn_[k];
+    std::vector<double> counts, dr, dx;
+    auto add = [&](const SecantColumns& e) {
+      counts.push_back(static_cast<double>(e.residual_differences.size()));
+      for (std::size_t j = 0; j < e.residual_differences.size(); ++j) {
+        dr.insert(dr.end(), e.residual_differences[j].begin(), e.residual_differences[j].end());
+        dx.insert(dx.end(), e.raw_differences[j].begin(), e.raw_differences[j].end());
+      }
+    };
+    add(q.current);
+    for (const SecantColumns& e : q.earlier) add(e);
+    if (dr.empty()) continue;
+    const std::string key = prefix + "iqn/" + std::to_string(k) + "/";
+    a.put(key + "counts", counts);
+    a.put(key + "residual_differences", dr);
+    a.put(key + "raw_differences", dx);
+  }
 }
 
 void Scheduler::import_state(const StateArchive& a, const std::string& prefix) {
@@ -180,6 +285,32 @@ void Scheduler::import_state(const StateArchive& a, const std::string& prefix) {
     s.max_step_ms = m[5 * k + 2];
     s.max_step_over_limit = m[5 * k + 3];
     s.wall_time_s = m[5 * k + 4];
+  }
+  for (std::size_t k = 0; k < iqn_.size(); ++k) {
+    QuasiNewtonMemory& q = iqn_[k];
+    q = QuasiNewtonMemory{};
+    const std::string key = prefix + "iqn/" + std::to_string(k) + "/";
+    if (!a.has(key + "counts")) continue;
+    const std::vector<double>& counts = a.get(key + "counts");
+    const std::vector<double>& dr = a.get(key + "residual_differences");
+    const std::vector<double>& dx = a.get(key + "raw_differences", static_cast<long>(dr.size()));
+    double columns = 0;
+    for (double c : counts) columns += c;
+    if (!(columns > 0) || dr.size() % static_cast<std::size_t>(columns) != 0)
+      throw InputError("checkpoint: entry '" + key + "residual_differences' does not hold whole columns");
+    const std::size_t n = dr.size() / static_cast<std::size_t>(columns);
+    std::size_t at = 0;
+    for (std::size_t e = 0; e < counts.size(); ++e) {
+      SecantColumns cols;
+      for (long j = 0; j < static_cast<long>(counts[e]); ++j, at += n) {
+        cols.residual_differences.emplace_back(dr.begin() + static_cast<long>(at), dr.begin() + static_cast<long>(at + n));
+        cols.raw_differences.emplace_back(dx.begin() + static_cast<long>(at), dx.begin() + static_cast<long>(at + n));
+      }
+      if (e == 0)
+        q.current = std::move(cols);
+      else
+        q.earlier.push_back(std::move(cols));
+    }
   }
 }
 

@@ -10,7 +10,7 @@
 //       earlier stages at the next interval or the next strong-coupling iteration)
 //   loose coupling: done (one pass, as the seed's production runs);
 //   strong coupling: restore every module to t and repeat the pass, the transferred data
-//     relaxed (constant factor or Aitken's Δ²), until the relative change of all transferred
+//     relaxed (constant factor, Aitken's Δ² or interface quasi-Newton IQN-ILS), until the relative change of all transferred
 //     data between two passes is below the tolerance (the seed: 1e-4) or the iteration limit
 //     is reached (counted and reported, never hidden).
 //
@@ -46,7 +46,7 @@ struct Stage {
 };
 
 enum class CouplingMode { loose, strong };
-enum class Relaxation { none, constant, aitken };
+enum class Relaxation { none, constant, aitken, iqn_ils };
 
 struct SchedulerOptions {
   double sync_step_ms = 1.0;              // Δt_sync, > 0
@@ -54,7 +54,12 @@ struct SchedulerOptions {
   double strong_tolerance = 1e-4;         // relative change of the transferred data
   int strong_max_iterations = 4;          // passes per interval, >= 1
   Relaxation relaxation = Relaxation::aitken;  // strong coupling only
-  double relaxation_factor = 0.5;         // constant factor / Aitken's first factor, (0, 1]
+  double relaxation_factor = 0.5;         // constant factor / Aitken's and IQN-ILS's first factor, (0, 1]
+  // IQN-ILS: the secant columns of this many earlier intervals are reused (0: this interval's
+  // only), and a column whose part orthogonal to the newer ones is below iqn_filter times its
+  // norm is dropped (ours: Haelterman et al. 2016's QR2 filter).
+  int iqn_reuse_intervals = 8;
+  double iqn_filter = 1e-2;
   // The smallest step a module may report before the run is declared unstable (a collapsing
   // stable step means a blow-up in the making) (ours).
   double min_step_ms = 1e-9;
@@ -106,6 +111,8 @@ class Scheduler {
   double run_pass(double t_end_ms, int iteration);
   void sub_cycle(std::size_t stage, double t_end_ms);
   double relax(std::size_t transfer, bool relaxed_transfer, int iteration);
+  // IQN-ILS's update of transfer k's data x from the raw data and residual r of this pass.
+  void quasi_newton(std::size_t k, const std::vector<double>& raw, const std::vector<double>& r, int iteration);
 
   std::vector<Stage> stages_;
   SchedulerOptions options_;
@@ -115,6 +122,17 @@ class Scheduler {
   // previous residual (Aitken).
   std::vector<std::vector<double>> current_, previous_, previous_residual_;
   std::vector<double> aitken_;  // Aitken's factor per transfer
+  // IQN-ILS per transfer: raw data of the last pass; secant columns (Δr, Δx̃) of this interval
+  // and of earlier ones, newest first.
+  struct SecantColumns {
+    std::vector<std::vector<double>> residual_differences, raw_differences;
+  };
+  struct QuasiNewtonMemory {
+    std::vector<double> last_raw;
+    SecantColumns current;
+    std::vector<SecantColumns> earlier;  // newest interval first, at most iqn_reuse_intervals
+  };
+  std::vector<QuasiNewtonMemory> iqn_;
 };
 
 }  // namespace systole::coupling

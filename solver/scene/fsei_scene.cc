@@ -638,6 +638,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   so.mode = fs.strong_coupling ? coupling::CouplingMode::strong : coupling::CouplingMode::loose;
   so.strong_tolerance = s.coupling.strong_tolerance;
   so.strong_max_iterations = s.coupling.strong_max_iterations;
+  so.relaxation = s.coupling.relaxation == "iqn_ils"    ? coupling::Relaxation::iqn_ils
+                  : s.coupling.relaxation == "constant" ? coupling::Relaxation::constant
+                  : s.coupling.relaxation == "none"     ? coupling::Relaxation::none
+                                                        : coupling::Relaxation::aitken;
+  so.iqn_reuse_intervals = s.coupling.iqn_reuse_intervals;
   // A resumed run: the fluid, the shells and the scheduler where the checkpoint left them, and
   // the markers on the shells' nodes (what the last interval's transfer had set)
   if (resume_from) {

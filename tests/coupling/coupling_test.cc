@@ -100,6 +100,17 @@ TEST(Scheduler, OptionsOutOfRangeNameTheFieldAndTheRange) {
   SchedulerOptions bad_iterations;
   bad_iterations.strong_max_iterations = 0;
   EXPECT_THROW(Scheduler({{&a, {}}}, bad_iterations), InputError);
+  SchedulerOptions bad_reuse;
+  bad_reuse.iqn_reuse_intervals = -1;
+  EXPECT_THROW(Scheduler({{&a, {}}}, bad_reuse), InputError);
+  SchedulerOptions bad_filter;
+  bad_filter.iqn_filter = 1;
+  try {
+    Scheduler scheduler({{&a, {}}}, bad_filter);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("iqn_filter = 1 is out of range (0, 1)"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Scheduler, ModulesMustStartAtTheSameTime) {
