@@ -7,8 +7,10 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <unordered_map>
 
@@ -18,6 +20,7 @@
 #include "solver/coupling/electro_module.h"
 #include "solver/coupling/fluid_module.h"
 #include "solver/coupling/scheduler.h"
+#include "solver/diagnostics/beat_metrics.h"
 #include "solver/diagnostics/kinematics.h"
 #include "solver/electro/tissue.h"
 #include "solver/geometry/left_heart.h"
@@ -261,8 +264,86 @@ const std::vector<std::string>& fsei_metric_names() {
       "ep_steps", "coupling_intervals", "coupling_passes", "coupling_unconverged_intervals",
       "coupling_max_final_residual", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
       "ep_wall_s",
-      "fluid_wall_s", "structure_wall_s", "resumed_from_ms", "wall_time_s"};
+      "fluid_wall_s", "structure_wall_s", "resumed_from_ms", "beats_completed", "wall_time_s"};
   return names;
+}
+
+std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<Series>& series, double period_ms,
+                                                             const std::string& scene) {
+  auto find = [&](const std::string& name) -> const std::vector<double>& {
+    for (const Series& x : series)
+      if (x.name == name) return x.values;
+    throw std::invalid_argument("fsei_beat_metrics: no series '" + name + "'");
+  };
+  const std::vector<double>& t_s = find("time_s");
+  for (const Series& x : series)
+    if (x.values.size() != t_s.size())
+      throw std::invalid_argument("fsei_beat_metrics: series '" + x.name + "' has " + std::to_string(x.values.size()) +
+                                  " samples, time_s " + std::to_string(t_s.size()));
+  struct Peak {
+    const char* series;
+    const char* metric;
+    enum { kLargest, kSmallest, kLargestMagnitude } kind;
+  };
+  const Peak peaks[] = {{"kinetic_energy_mj", "kinetic_energy_max_mj", Peak::kLargest},
+                        {"lv_twist_deg", "lv_twist_peak_deg", Peak::kLargestMagnitude},
+                        {"lv_longitudinal_strain", "lv_longitudinal_strain_min", Peak::kSmallest},
+                        {"lv_circumferential_strain", "lv_circumferential_strain_min", Peak::kSmallest},
+                        {"mitral_tip_velocity_m_s", "mitral_tip_velocity_max_m_s", Peak::kLargest},
+                        {"aortic_tip_velocity_m_s", "aortic_tip_velocity_max_m_s", Peak::kLargest},
+                        {"aortic_cusps_wss_max_pa", "aortic_cusps_wss_max_pa", Peak::kLargest},
+                        {"la_volume_ml", "la_volume_max_ml", Peak::kLargest},
+                        {"la_volume_ml", "la_volume_min_ml", Peak::kSmallest},
+                        {"la_pressure_mmhg", "la_pressure_max_mmhg", Peak::kLargest}};
+  std::vector<std::map<std::string, double>> out;
+  const double period_s = 1e-3 * period_ms, tol_s = 1e-9;
+  if (t_s.empty() || !(period_s > 0)) return out;
+  for (int b = 1; b * period_s <= t_s.back() + tol_s; ++b) {
+    const double start = (b - 1) * period_s, stop = b * period_s;
+    std::size_t i0 = 0;
+    while (i0 < t_s.size() && t_s[i0] < start - tol_s) ++i0;
+    std::size_t i1 = i0;
+    while (i1 < t_s.size() && t_s[i1] <= stop + tol_s) ++i1;
+    // only whole beats: samples at both ends
+    if (i1 - i0 < 3 || std::abs(t_s[i0] - start) > tol_s || std::abs(t_s[i1 - 1] - stop) > tol_s) continue;
+    const std::size_t n = i1 - i0;
+    auto window = [&](const std::string& name) {
+      const std::span<const double> w(find(name).data() + i0, n);
+      for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite(w[i]))
+          throw InstabilityError(scene, "beat " + std::to_string(b) + " series " + name, t_s[i0 + i],
+                                 "a non-finite sample");
+      return w;
+    };
+    diagnostics::BeatSamples bs;
+    bs.time_s = window("time_s");
+    bs.lv_volume_ml = window("lv_volume_ml");
+    bs.lv_pressure_mmhg = window("lv_pressure_mmhg");
+    bs.aortic_pressure_mmhg = window("aortic_root_pressure_mmhg");
+    bs.mitral_flow_ml_s = window("mitral_flow_ml_s");
+    bs.aortic_flow_ml_s = window("aortic_flow_ml_s");
+    bs.beat_start_s = start;
+    bs.period_s = period_s;
+    // a valve is open while its flow exceeds 5 % of its peak: the leaflets' motion and the
+    // closed valves' leak move a few % of the peak flow back and forth (ours)
+    bs.valve_threshold_fraction = 0.05;
+    std::map<std::string, double> m = diagnostics::to_map(diagnostics::compute_beat_metrics(bs));
+    for (const Peak& p : peaks) {
+      const std::span<const double> v = window(p.series);
+      double best = v[0];
+      for (double x : v)
+        if (p.kind == Peak::kLargest ? x > best : p.kind == Peak::kSmallest ? x < best : std::abs(x) > std::abs(best))
+          best = x;
+      m[p.metric] = best;
+    }
+    m["beat"] = b;
+    m["beat_start_s"] = start;
+    for (const auto& [key, value] : m)
+      if (!std::isfinite(value))
+        throw InstabilityError(scene, "beat " + std::to_string(b) + " metric " + key, stop, "a non-finite beat metric");
+    out.push_back(std::move(m));
+  }
+  return out;
 }
 
 RunResult run_fsei(const config::Scenario& s, RunControl& control) {
@@ -979,6 +1060,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
   add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
+  {
+    std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);
+    M["beats_completed"] = static_cast<double>(beats.size());
+    if (s.outputs.metrics) result.beats = std::move(beats);
+  }
   result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +
                          std::to_string(pts.ny) + "x" + std::to_string(pts.nz) + " points), " +
                          std::to_string(markers.size()) + " markers; chamber pressures relative to the outer-fluid probe");

@@ -27,6 +27,7 @@
 // state is written there every fsei.checkpoint_interval_ms and on cancel, and a run that finds
 // a checkpoint of the same scenario there resumes from it, bitwise as the straight run;
 // metric resumed_from_ms says where the run started (0: from t = 0).
+#include <map>
 #include <string>
 #include <vector>
 
@@ -50,5 +51,16 @@ GridPoints fsei_grid_points(const config::Scenario& scenario);
 RunResult run_fsei(const config::Scenario& scenario, RunControl& control);
 
 const std::vector<std::string>& fsei_metric_names();
+
+// Per-beat metrics of every whole beat [(b − 1) T, b T] in a run's series (the scene starts at
+// the beginning of systole, so a beat runs from systole to the end of diastole): the 0-D
+// scene's definitions (solver/diagnostics/beat_metrics.h: EDV, ESV, EF, CO, valve phases, E
+// and A waves, ...) with valves open while their flow exceeds 5 % of its peak (ours), and each
+// beat's peaks of the kinetic energy, twist, strains, tip velocities, cusps' WSS, LA volume and
+// pressure; "beat" (1, 2, ...) and "beat_start_s". A beat without samples at both ends (a
+// run that stopped inside it) is left out. Needs the series the scene writes
+// (std::invalid_argument otherwise); a non-finite metric is an InstabilityError of `scene`.
+std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<Series>& series, double period_ms,
+                                                             const std::string& scene);
 
 }  // namespace systole::scene

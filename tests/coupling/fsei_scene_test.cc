@@ -101,6 +101,63 @@ TEST(FseiScene, PresetsAreTheIssuesGrids) {
   EXPECT_EQ(custom.nz, 109);
 }
 
+// Per-beat metrics from a run's series (fsei_beat_metrics), on synthetic curves with exact
+// values, 2.5 beats of 800 ms sampled every ms (the scene's default): a beat starts at systole;
+// aortic ejection A sin(π (t − 50)/250) on [50, 300] ms (60 ml), mitral filling
+// Q sin(π (t − 340)/460) on [340, 800] ms (60 ml), the LV volume their integral from 120 ml.
+// With valves "open" above 5 % of their peak: aortic closure where sin = 0.05 before 300 ms,
+// mitral closure where sin = 0.05 before 800 ms; ESV and EDV are the volumes there.
+TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
+  const double pi = std::acos(-1.0), T = 800;
+  const double A = 60 / (250e-3 * 2 / pi), Q = 60 / (460e-3 * 2 / pi);  // ml/s: ∫ = 60 ml
+  auto aortic = [&](double tb) { return tb > 50 && tb < 300 ? A * std::sin(pi * (tb - 50) / 250) : 0.0; };
+  auto mitral = [&](double tb) { return tb > 340 ? Q * std::sin(pi * (tb - 340) / 460) : 0.0; };
+  auto volume = [&](double tb) {  // 120 − ∫ aortic + ∫ mitral, exact
+    double v = 120;
+    if (tb > 50) v -= A * 250e-3 / pi * (1 - std::cos(pi * (std::min(tb, 300.0) - 50) / 250));
+    if (tb > 340) v += Q * 460e-3 / pi * (1 - std::cos(pi * (tb - 340) / 460));
+    return v;
+  };
+  std::vector<Series> series(13);
+  const char* names[] = {"time_s", "lv_pressure_mmhg", "la_pressure_mmhg", "aortic_root_pressure_mmhg", "lv_volume_ml",
+                         "la_volume_ml", "aortic_flow_ml_s", "mitral_flow_ml_s", "kinetic_energy_mj", "lv_twist_deg",
+                         "lv_longitudinal_strain", "lv_circumferential_strain", "mitral_tip_velocity_m_s"};
+  for (std::size_t k = 0; k < series.size(); ++k) series[k].name = names[k];
+  for (const char* extra : {"aortic_tip_velocity_m_s", "aortic_cusps_wss_max_pa"}) series.push_back({extra, "", {}});
+  for (int i = 0; i <= 2000; ++i) {
+    const double t = i, tb = std::fmod(t, T);
+    const double values[] = {1e-3 * t, tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0, 9, 80, volume(tb), 40,
+                             aortic(tb), mitral(tb), 1e-3 * t /* grows: each beat's own peak */,
+                             -10 * std::sin(pi * tb / T), -0.15, -0.2, 0.5, 1.2, 3};
+    for (std::size_t k = 0; k < series.size(); ++k) series[k].values.push_back(values[k]);
+  }
+  const auto beats = fsei_beat_metrics(series, T, "fsi");
+  ASSERT_EQ(beats.size(), 2u);  // the half beat at the end is left out
+  const double ao_close_ms = 300 - 250 * std::asin(0.05) / pi, mi_close_ms = 800 - 460 * std::asin(0.05) / pi;
+  const double esv = volume(ao_close_ms), edv = volume(mi_close_ms);
+  for (std::size_t b = 0; b < 2; ++b) {
+    const auto& m = beats[b];
+    EXPECT_EQ(m.at("beat"), static_cast<double>(b + 1));
+    EXPECT_NEAR(m.at("beat_start_s"), 0.8 * static_cast<double>(b), 1e-12);
+    EXPECT_NEAR(m.at("esv_ml"), esv, 0.05);
+    EXPECT_NEAR(m.at("edv_ml"), edv, 0.05);
+    EXPECT_NEAR(m.at("ejection_fraction_percent"), 100 * (edv - esv) / edv, 0.05);
+    EXPECT_NEAR(m.at("cardiac_output_l_min"), (edv - esv) * 75 / 1000, 0.005);
+    EXPECT_NEAR(m.at("aortic_valve_close_phase"), ao_close_ms / T, 2e-3);
+    EXPECT_NEAR(m.at("mitral_valve_open_phase"), (340 + 460 * std::asin(0.05) / pi) / T, 2e-3);
+    EXPECT_NEAR(m.at("lv_peak_pressure_mmhg"), 120, 0.01);
+    EXPECT_NEAR(m.at("kinetic_energy_max_mj"), 0.8 * static_cast<double>(b + 1), 1e-12);  // the window's own
+    EXPECT_NEAR(m.at("lv_twist_peak_deg"), -10, 1e-3);  // signed, largest magnitude
+    EXPECT_EQ(m.at("lv_longitudinal_strain_min"), -0.15);
+    EXPECT_EQ(m.at("la_volume_max_ml"), 40);
+  }
+  // a non-finite sample is a diagnosis, never a metric; a missing series a programming error
+  series[8].values[1200] = std::nan("");  // the kinetic energy in beat 2
+  EXPECT_THROW(fsei_beat_metrics(series, T, "fsi"), InstabilityError);
+  series.erase(series.begin() + 4);
+  EXPECT_THROW(fsei_beat_metrics(series, T, "fsi"), std::invalid_argument);
+}
+
 TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   // A grid too coarse for the valves: the message gives the minimum.
   const std::string coarse = error_of(scenario(
