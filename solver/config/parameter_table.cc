@@ -544,6 +544,10 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi': strong coupling (fluid and structure repeated per interval, "
                            "coupling.strong_tolerance and strong_max_iterations) instead of the seed's loose "
                            "coupling."));
+  t.push_back(SYSTOLE_BOOL(fsei.aortic_outlet_held, true,
+                           "Scenes 'fsei'/'fsi': hold the aorta's Darcy outlet (its last 1.5 diameters) in place "
+                           "(ours: the seed anchors every body to the valvular plane only; held, the descending "
+                           "aorta cannot swing into the box's wall, and the thoracic aorta is tethered to the spine)."));
   t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over, false,
                            "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
                            "(ours; it made the membrane sphere tight but set off an oscillation in the heart "

@@ -214,6 +214,7 @@ struct Fsei {
   double aortic_pressure_ramp_ms;       // 0: at once; else the outer load ramped over it, blood from rest (ours)
   double field_interval_ms;             // 0: no fields; else a frame of fluid and bodies every this
   double checkpoint_interval_ms;        // the whole coupled state every this (RunControl::checkpoint_directory)
+  bool aortic_outlet_held;              // the aorta's Darcy outlet (kOutflow nodes) held (ours)
 };
 
 struct Scenario {

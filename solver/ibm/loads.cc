@@ -15,8 +15,7 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
   // 10 values per point: p, then ∂u/∂x_j, ∂v/∂x_j, ∂w/∂x_j.
   std::vector<double> local(10 * n, 0.0), global(transfer.slabs().size() > 1 ? 10 * n : 0, 0.0);
   // Each point writes its own row: threads over points, no races.
-#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(n) >= kThreadedMarkers)
-  for (std::ptrdiff_t qq = 0; qq < static_cast<std::ptrdiff_t>(n); ++qq) {
+  parallel_for_rethrow(static_cast<std::ptrdiff_t>(n), kThreadedMarkers, [&](std::ptrdiff_t qq) {
     const std::size_t q = static_cast<std::size_t>(qq);
     double* row = local.data() + 10 * q;
     // The four locations share their 1-D weights; φ and ∂φ are contracted with the fields
@@ -30,7 +29,7 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
       (void)mls_contract<Location::y_face, true>(u.v, P, row + 4);
     if (transfer.owns_plane(mls_k_centre<Location::z_face>(P)))
       (void)mls_contract<Location::z_face, true>(u.w, P, row + 7);
-  }
+  });
   if (transfer.slabs().size() > 1)
     MPI_Allreduce(local.data(), global.data(), static_cast<int>(local.size()), MPI_DOUBLE, MPI_SUM,
                   transfer.slabs().comm());

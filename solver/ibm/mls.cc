@@ -18,6 +18,11 @@ double mls_weight_derivative(double r) {
   return 0;
 }
 
+WallProximityError::WallProximityError(const Eigen::Vector3d& X)
+    : std::runtime_error("ibm MLS: singular moment matrix at (" + std::to_string(X[0]) + ", " + std::to_string(X[1]) +
+                         ", " + std::to_string(X[2]) + "): the point is too close to a wall"),
+      point_(X) {}
+
 namespace {
 
 using grid::Location;
@@ -27,10 +32,7 @@ using grid::Location;
 // to X_d (grid units). δ(a) = (first + a + offset) − X_d/Δ_d in cells.
 using Axis = MlsAxis;
 
-[[noreturn]] void singular(const Eigen::Vector3d& X) {
-  throw std::logic_error("ibm MLS: singular moment matrix at (" + std::to_string(X[0]) + ", " + std::to_string(X[1]) +
-                         ", " + std::to_string(X[2]) + "): the point is too close to a wall");
-}
+[[noreturn]] void singular(const Eigen::Vector3d& X) { throw WallProximityError(X); }
 
 // The weight and its derivative for 0 ≤ r ≤ 1 without branches (ours, for cost: the two
 // outer nodes of a support have r ∈ [¼, ¾], so a branch on r ≤ ½ is mispredicted half the time).

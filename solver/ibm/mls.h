@@ -23,12 +23,45 @@
 // uses the remaining ≥ 2 planes (the markers are kept ≥ Δz from the walls, markers.h).
 // x and y are periodic: indices wrap.
 #include <array>
+#include <exception>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/Core>
 
 #include "solver/grid/grid.h"
 
 namespace systole::ibm {
+
+// A point (marker or load probe) whose MLS support has fewer than two node planes inside the
+// fluid in some direction: a body came within about a cell of the box's wall. point() is in the
+// grid's (nondimensional) coordinates; the scene turns it into a diagnosis with its time.
+class WallProximityError : public std::runtime_error {
+ public:
+  explicit WallProximityError(const Eigen::Vector3d& point);
+  const Eigen::Vector3d& point() const { return point_; }
+
+ private:
+  Eigen::Vector3d point_;
+};
+
+// Runs body(i) for i in [0, n) on the OpenMP threads when n >= threaded (else serially), and
+// rethrows the first exception a body threw after the loop (an exception must not leave an
+// OpenMP region: the process would abort). Bodies write disjoint data.
+template <class Body>
+void parallel_for_rethrow(std::ptrdiff_t n, std::ptrdiff_t threaded, Body&& body) {
+  std::exception_ptr first;
+#pragma omp parallel for schedule(static) if (n >= threaded)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    try {
+      body(i);
+    } catch (...) {
+#pragma omp critical(systole_ibm_rethrow)
+      if (!first) first = std::current_exception();
+    }
+  }
+  if (first) std::rethrow_exception(first);
+}
 
 struct MlsStencil {
   // Global indices of the support's first node (i0, j0 wrapped into [0, n); k0 unwrapped: the

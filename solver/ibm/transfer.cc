@@ -77,6 +77,14 @@ void Transfer::rebuild_body(std::size_t body) {
   }
   const int lo = slabs_.k_begin(), hi = slabs_.k_begin() + slabs_.k_count();  // [lo, hi)
   const std::size_t first = b.first_marker, count = b.marker_count;
+  // A marker that moved within a cell of a z wall (the MLS support would leave the fluid):
+  // every rank holds every position, so every rank throws here alike (no rank left waiting in
+  // a collective).
+  {
+    const double z_lo = g.dz(), z_hi = g.lz() - g.dz();
+    for (std::size_t q = first; q < first + count; ++q)
+      if (!(m.position[q].z() >= z_lo && m.position[q].z() <= z_hi)) throw WallProximityError(m.position[q]);
+  }
   // Pass 1 (cheap): which (marker, component) pairs this rank needs, from the centre plane of
   // each support alone (the stencil's k_centre: mls_nearest, as in mls.cc), and each pair's
   // slot: the lists stay in marker order whatever the thread count.
@@ -97,10 +105,9 @@ void Transfer::rebuild_body(std::size_t body) {
   }
   for (int c = 0; c < 3; ++c) E[static_cast<std::size_t>(c)].resize(n_c[c]);
   // Pass 2: the stencils (the three faces share their 1-D weights), each into its slot.
-#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(count) >= kThreadedMarkers)
-  for (std::ptrdiff_t qq = 0; qq < static_cast<std::ptrdiff_t>(count); ++qq) {
+  parallel_for_rethrow(static_cast<std::ptrdiff_t>(count), kThreadedMarkers, [&](std::ptrdiff_t qq) {
     const std::size_t q = static_cast<std::size_t>(qq);
-    if (flags[q] == 0) continue;
+    if (flags[q] == 0) return;
     std::array<MlsStencil, 3> st;
     mls_face_stencils(g, m.position[first + q], st);
     for (int c = 0; c < 3; ++c) {
@@ -112,7 +119,7 @@ void Transfer::rebuild_body(std::size_t body) {
       e.spreads = spreads;
       e.stencil = st[static_cast<std::size_t>(c)];
     }
-  }
+  });
 }
 
 template <grid::Location L>

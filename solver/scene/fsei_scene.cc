@@ -26,6 +26,7 @@
 #include "solver/geometry/left_heart.h"
 #include "solver/geometry/tiling.h"
 #include "solver/geometry/tri_mesh.h"
+#include "solver/ibm/mls.h"
 #include "solver/lumped/activation.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
@@ -264,7 +265,7 @@ const std::vector<std::string>& fsei_metric_names() {
       "ep_steps", "coupling_intervals", "coupling_passes", "coupling_unconverged_intervals",
       "coupling_max_final_residual", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
       "ep_wall_s",
-      "fluid_wall_s", "structure_wall_s", "resumed_from_ms", "beats_completed", "wall_time_s"};
+      "fluid_wall_s", "structure_wall_s", "resumed_from_ms", "beats_completed", "heart_rate_bpm", "wall_time_s"};
   return names;
 }
 
@@ -441,6 +442,15 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     // The seed's limiter (no chordae): towards the atrium, -z (ours: all the time; the seed's
     // applies in systole only, and the leaflets open towards +z).
     if (mitral && s.structure.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
+    // The Darcy outlet held (fsei.aortic_outlet_held, ours): anchored to the plane alone, the
+    // descending aorta's free end drifted 3 mm into the box's wall by 111 ms (docs/fsei.md).
+    if (name == geometry::kAortaBody && fs.aortic_outlet_held) {
+      const geometry::TriMesh& aorta = heart.body(name);
+      std::vector<std::int32_t> outlet;
+      for (std::size_t i = 0; i < aorta.node_count(); ++i)
+        if (aorta.region[i] & geometry::kOutflow) outlet.push_back(static_cast<std::int32_t>(i));
+      models.back().fix_nodes(outlet);
+    }
   }
   structure::ContactOptions contact;
   contact.enabled = s.structure.contact;
@@ -932,7 +942,26 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     const double next_field = fields ? static_cast<double>(field_frames_done) * fs.field_interval_ms : 1e300;
     const bool field_only = next_field < next - 1e-9;
     if (field_only) next = next_field;
-    scheduler.advance_to(next);
+    try {
+      scheduler.advance_to(next);
+    } catch (const ibm::WallProximityError& e) {
+      // a body came within a cell of the box's z wall: a diagnosis with the nearest shell node
+      const Vec3 at_mm = e.point() * kDmMm;
+      std::size_t best_body = 0, best_node = 0;
+      double best = 1e300;
+      for (std::size_t b = 0; b < group.body_count(); ++b) {
+        const std::vector<Vec3>& x = group.body(b).positions_mm();
+        for (std::size_t n = 0; n < x.size(); ++n)
+          if ((x[n] - at_mm).squaredNorm() < best) best = (x[n] - at_mm).squaredNorm(), best_body = b, best_node = n;
+      }
+      std::ostringstream place, what;
+      place.precision(4);
+      place << "body '" << group.body(best_body).name() << "' node " << best_node << " (a marker or load probe at ("
+            << at_mm.x() << ", " << at_mm.y() << ", " << at_mm.z() << ") mm)";
+      what << "a body moved within a cell of the box's z wall (z in [0, " << s.fluid.box_z_mm
+           << "] mm): the immersed boundary's support would leave the fluid";
+      throw InstabilityError("immersed boundary", place.str(), 1e-3 * scheduler.time_ms(), what.str());
+    }
     t = next;
     set_caps(t);
     if (fields && std::abs(t - next_field) < 1e-9) {
@@ -1063,6 +1092,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   {
     std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);
     M["beats_completed"] = static_cast<double>(beats.size());
+    M["heart_rate_bpm"] = 60000.0 / period_ms;
+    // the last whole beat's metrics also at the top (metrics.json, systole-plot-beat); present
+    // only when a beat completed
+    if (!beats.empty())
+      for (const auto& [key, value] : beats.back())
+        if (!M.count(key)) M[key] = value;
     if (s.outputs.metrics) result.beats = std::move(beats);
   }
   result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +

@@ -94,5 +94,37 @@ TEST(Loads, TwoSidedLoadsUseTheJumpAcrossTheSheet) {
   EXPECT_LT(worst, 1e-14);
 }
 
+// A body that moves within a cell of a z wall is a WallProximityError (naming the point), not an
+// abort: the markers' rebuild checks every position alike on every rank, and the load probes
+// (threaded above kThreadedMarkers points) rethrow after their OpenMP loop.
+TEST(Loads, APointWithinACellOfTheWallIsAnErrorNotAnAbort) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_WORLD);
+  Markers markers(kGrid);
+  BodyOptions o;
+  o.mm_per_unit = 1.0;
+  o.normals = ExpectedNormals::outward;
+  const int body = markers.add_body(sphere_mesh(Vec3(1, 1, 1), 0.4, 2), "sphere", o);
+  Transfer t(slabs, markers);
+  const LinearFlow f(slabs);
+  // the sphere moved down until its lowest markers are half a cell from the wall z = 0
+  markers.set_rigid_motion(body, Vec3(0, 0, -(0.6 - 0.5 * kGrid.dz())), Vec3(0, 0, 1), Vec3(1, 1, 1));
+  markers.advance_rigid(1.0);
+  try {
+    t.rebuild();
+    FAIL() << "no error";
+  } catch (const WallProximityError& e) {
+    EXPECT_LT(e.point().z(), kGrid.dz());
+  }
+  // many probe points, one of them a quarter cell from the wall z = 2
+  std::vector<Vec3> points(static_cast<std::size_t>(kThreadedMarkers) + 10, Vec3(1, 1, 1));
+  points[12345] = Vec3(1, 1, kGrid.lz() - 0.25 * kGrid.dz());
+  try {
+    (void)probe(Transfer(slabs, Markers(kGrid)), {f.u, f.v, f.w}, f.p, points);
+    FAIL() << "no error";
+  } catch (const WallProximityError& e) {
+    EXPECT_EQ(e.point(), points[12345]);
+  }
+}
+
 }  // namespace
 }  // namespace systole::ibm
