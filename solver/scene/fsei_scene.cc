@@ -879,7 +879,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   }
   // Field frames (fsei.field_interval_ms) from t = 0, into the caller's output directory.
   std::unique_ptr<FseiFieldWriter> fields;
-  long field_frames_done = 0;
+  long field_frames_done = 0;  // the next frame is at field_frames_done × fsei.field_interval_ms
   std::vector<double> resumed_frames_ms;
   if (resume_from && resumed.has("scene/field_times_ms")) resumed_frames_ms = resumed.get("scene/field_times_ms");
   if (fs.field_interval_ms > 0 && !control.output_directory().empty()) {
@@ -893,7 +893,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                                                heart.body(geometry::kValvularPlaneBody), group, names, units,
                                                resume_from ? &resumed_frames_ms : nullptr);
     if (!resume_from) fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
-    field_frames_done = fields->frames();
+    // resumed: the next frame after the checkpoint's time, whether the frames continue in the
+    // same directory or start anew (a new directory, another interval)
+    field_frames_done = resume_from ? static_cast<long>(std::floor(t / fs.field_interval_ms + 1e-9)) + 1 : fields->frames();
   }
   // Checkpoints every fsei.checkpoint_interval_ms of simulated time (at a sample), and when the
   // run is cancelled (a worker that stops hands the job back at that point). Collective.
