@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
                                       {"marker_retraction_cells", &o.marker_retraction_cells},
                                       {"marker_spacing_fraction", &o.marker_spacing_fraction},
                                       {"sync_step_ms", &o.sync_step_ms},
+                                      {"carry_over_factor", &o.carry_over_factor},
                                       {"end_ms", &o.end_ms},
                                       {"sample_ms", &o.sample_ms}};
   std::map<std::string, int*> integer{{"cells", &o.cells},

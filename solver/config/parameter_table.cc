@@ -548,6 +548,10 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi': hold the aorta's Darcy outlet (its last 1.5 diameters) in place "
                            "(ours: the seed anchors every body to the valvular plane only; held, the descending "
                            "aorta cannot swing into the box's wall, and the thoracic aorta is tethered to the spine)."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_factor, "", 1, 0.01, 1,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of the previous step's "
+                           "immersed-boundary force carried over (ours; below 1 the carried force cannot wind up "
+                           "where the forcing cannot remove the slip, at the price of some slip: docs/fsei.md)."));
   t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over, false,
                            "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
                            "(ours; it made the membrane sphere tight but set off an oscillation in the heart "

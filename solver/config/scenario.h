@@ -215,6 +215,7 @@ struct Fsei {
   double field_interval_ms;             // 0: no fields; else a frame of fluid and bodies every this
   double checkpoint_interval_ms;        // the whole coupled state every this (RunControl::checkpoint_directory)
   bool aortic_outlet_held;              // the aorta's Darcy outlet (kOutflow nodes) held (ours)
+  double forcing_carry_over_factor;     // ibm::ForcingParameters::carry_over_factor (ours)
 };
 
 struct Scenario {

@@ -13,6 +13,11 @@ void validate(const ForcingParameters& p) {
     m << "ibm.forcing_iterations = " << p.iterations << " is out of range [1, 20]";
     throw InputError(m.str());
   }
+  if (!(p.carry_over_factor > 0 && p.carry_over_factor <= 1)) {
+    std::ostringstream m;
+    m << "ibm carry-over factor = " << p.carry_over_factor << " is out of range (0, 1]";
+    throw InputError(m.str());
+  }
   if (!(p.rebuild_tolerance_cells >= 0 && p.rebuild_tolerance_cells <= 0.5)) {
     std::ostringstream m;
     m << "ibm rebuild tolerance = " << p.rebuild_tolerance_cells << " cells is out of range [0, 0.5]";
@@ -68,7 +73,8 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   report_.slip_before = slip_of(U);
   if (par_.carry_over && previous_.size() == n) {
     // Start from the previous step's force (active markers only), then correct what it leaves.
-    for (std::size_t b = 0; b < n; ++b) force_[b] = markers_.active(b) ? previous_[b] : Vec3::Zero();
+    for (std::size_t b = 0; b < n; ++b)
+      force_[b] = markers_.active(b) ? Vec3(par_.carry_over_factor * previous_[b]) : Vec3::Zero();
     transfer_.spread(force_, f);
     update(u_hat.u, f.u, *work_u_);
     update(u_hat.v, f.v, *work_v_);

@@ -26,6 +26,11 @@ struct ForcingParameters {
   // a leak through the plate; carried over, the slip of a steady load goes to 0. Costs one
   // more interpolation and spreading per step (markers switched on start from F = 0).
   bool carry_over = false;
+  // With carry_over: the share β of F^{n−1} carried, (0, 1] (ours). Below 1 the integral leaks:
+  // a slip that the forcing cannot remove (markers of two bodies with different velocities in
+  // one support) no longer winds the force up without bound (F ≤ correction / (1 − β)), at the
+  // price of a steady slip (1 − β) times the one without carry-over.
+  double carry_over_factor = 1.0;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
   double rebuild_tolerance_cells = 0;

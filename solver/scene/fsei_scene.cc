@@ -545,6 +545,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   }
   ibm::ForcingParameters forcing_parameters;
   forcing_parameters.carry_over = fs.forcing_carry_over;
+  forcing_parameters.carry_over_factor = fs.forcing_carry_over_factor;
   forcing_parameters.iterations = fs.forcing_iterations;
   forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
   ibm::DirectForcing forcing(slabs, markers, forcing_parameters);

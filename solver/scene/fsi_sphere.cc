@@ -106,6 +106,7 @@ FsiSphereResult run_fsi_sphere(const FsiSphereOptions& o, MPI_Comm comm) {
   const geometry::TilingMap map = geometry::tiling_map(current, markers.bodies()[body].tiling_level);
   ibm::ForcingParameters fpar;
   fpar.carry_over = o.carry_over;
+  fpar.carry_over_factor = o.carry_over_factor;
   fpar.iterations = o.forcing_iterations;
   ibm::DirectForcing forcing(slabs, markers, fpar);
   coupling::FluidModule fm(fluid, markers, forcing, coupling::FluidModuleOptions{});

@@ -27,6 +27,7 @@ struct FsiSphereOptions {
   double stiffness_scale = 20;      // × the seed's LV Fung c (isotropic, α_c = α_f; ours)
   double stretch = 1.1;             // initial radius / stress-free radius
   bool carry_over = true;           // ibm::ForcingParameters::carry_over (false: the seed's forcing)
+  double carry_over_factor = 1;     // ibm::ForcingParameters::carry_over_factor
   int forcing_iterations = 1;       // ibm::ForcingParameters::iterations
   double marker_retraction_cells = 0;
   double marker_spacing_fraction = 0.7;
