@@ -417,6 +417,19 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   EXPECT_NEAR(longer.metrics.at("resumed_from_ms"), 0.1, 1e-9);
   EXPECT_NEAR(longer.metrics.at("simulated_time_ms"), 0.3, 1e-9);
   EXPECT_EQ(longer.series.front().values.size(), 4u);  // 0, 0.1 (from the checkpoint), 0.2, 0.3 ms
+  // resumed (at 0.2 ms) with field frames the earlier attempts did not write (the interval is not
+  // part of the fingerprint): the frames start after the checkpoint, 0.25 … 0.4 ms
+  const auto out = fresh_directory("checkpoint_fields");
+  {
+    nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.4}, {"checkpoint_interval_ms", 0.1}, {"field_interval_ms", 0.05}}},
+                          {"outputs", {{"time_series_interval_ms", 0.1}}}};
+    ToDirectory control(out, dir);
+    const RunResult with_fields = run_fsei(scenario("fsi", doc), control);
+    EXPECT_NEAR(with_fields.metrics.at("resumed_from_ms"), 0.2, 1e-9);
+    EXPECT_EQ(with_fields.metrics.at("field_frames"), 4);
+    EXPECT_TRUE(std::filesystem::exists(out / "fsei_fields.xmf"));
+  }
+  std::filesystem::remove_all(out);
   std::filesystem::remove_all(dir);
 }
 
