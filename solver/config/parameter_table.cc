@@ -552,6 +552,14 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of the previous step's "
                            "immersed-boundary force carried over (ours; below 1 the carried force cannot wind up "
                            "where the forcing cannot remove the slip, at the price of some slip: docs/fsei.md)."));
+  t.push_back(SYSTOLE_CHOICE(fsei.aortic_pretension, "outer_load",
+                             (std::vector<std::string_view>{"outer_load", "prestress"}),
+                             "Scenes 'fsei'/'fsi': how the aorta's wall holds fsei.aortic_pressure_mmhg (ours; the "
+                             "seed: 'pretensioned by an external force'): outer_load, an outer pressure as large on "
+                             "the wall (the wall stays untensioned); prestress, the wall's springs shortened so that "
+                             "the built aorta is in equilibrium with that pressure inside and none outside "
+                             "(solver/structure/prestress.h; with fsei.aortic_pressure_ramp_ms the shortening is "
+                             "ramped). docs/fsei.md."));
   t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over, false,
                            "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
                            "(ours; it made the membrane sphere tight but set off an oscillation in the heart "

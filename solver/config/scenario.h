@@ -216,6 +216,7 @@ struct Fsei {
   double checkpoint_interval_ms;        // the whole coupled state every this (RunControl::checkpoint_directory)
   bool aortic_outlet_held;              // the aorta's Darcy outlet (kOutflow nodes) held (ours)
   double forcing_carry_over_factor;     // ibm::ForcingParameters::carry_over_factor (ours)
+  std::string aortic_pretension;        // "outer_load" | "prestress": how the wall holds the ground pressure (ours)
 };
 
 struct Scenario {

@@ -34,6 +34,7 @@
 #include "solver/scene/fsei_fields.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/structure/contact.h"
+#include "solver/structure/prestress.h"
 #include "solver/structure/shell.h"
 
 namespace systole::scene {
@@ -470,7 +471,33 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // t = 0 and the closed aortic valve carries the pressure from the first step. (Ours: the
   // outer load stays on; the wall's elasticity adds to it as the aorta fills.) The fluid's
   // pressure is incremental, so the offset persists: the outer fluid stays the reference.
-  const double aortic_outer_kpa = fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+  const bool aorta_prestressed = fs.aortic_pretension == "prestress" && fs.aortic_pressure_mmhg > 0;
+  const double aortic_outer_kpa =
+      aorta_prestressed ? 0.0 : fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+  // fsei.aortic_pretension = prestress (ours): instead of the outer load, the aorta's springs are
+  // shortened so that its built shape is in equilibrium with the ground pressure inside (on every
+  // triangle outside the Darcy outlet, as the outer load) and none outside; anchors and the held
+  // outlet take the reactions (structure/prestress.h). With a ramp the rest lengths go from the
+  // built ones to these over fsei.aortic_pressure_ramp_ms (set in the loads transfer).
+  std::vector<double> aorta_built_rest_mm, aorta_prestress_rest_mm;
+  std::optional<structure::Prestress> aorta_prestress;
+  if (aorta_prestressed) {
+    structure::ShellModel& aorta = group.body(kAorta);
+    const double p_kpa = fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+    aorta_prestress = structure::membrane_prestress(
+        aorta, structure::pressure_nodal_forces(aorta.stress_free_mesh(), aorta.positions_mm(), -p_kpa, geometry::kOutflow));
+    aorta_prestress_rest_mm = aorta_prestress->rest_length_mm;
+    for (const auto& sp : aorta.springs()) aorta_built_rest_mm.push_back(sp.rest_length_mm);
+    if (fs.aortic_pressure_ramp_ms == 0) aorta.set_rest_lengths_mm(aorta_prestress_rest_mm);
+  }
+  // The rest lengths of the ramp at time t (ms).
+  auto aorta_rest_lengths_at = [&](double t_ms) {
+    const double r = std::min(1.0, t_ms / fs.aortic_pressure_ramp_ms);
+    std::vector<double> l0(aorta_built_rest_mm.size());
+    for (std::size_t k = 0; k < l0.size(); ++k)
+      l0[k] = aorta_built_rest_mm[k] + r * (aorta_prestress_rest_mm[k] - aorta_built_rest_mm[k]);
+    return l0;
+  };
   double aorta_initial_ml = 0;  // the volume started at the ground pressure (a note)
   if (fs.aortic_pressure_mmhg > 0 && fs.aortic_pressure_ramp_ms == 0) {
     const geometry::TriMesh& aorta = heart.body(geometry::kAortaBody);
@@ -675,6 +702,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                                  const std::size_t i = 3 * (shell_offset[b] + n);
                                  f[n] = Vec3(d[i], d[i + 1], d[i + 2]);
                                }
+                               if (b == kAorta && aorta_prestressed && fs.aortic_pressure_ramp_ms > 0)
+                                 group.body(b).set_rest_lengths_mm(aorta_rest_lengths_at(fluid_module.time_ms()));
                                if (b == kAorta && aortic_outer_kpa > 0) {
                                  const double ramp = fs.aortic_pressure_ramp_ms > 0
                                                          ? std::min(1.0, fluid_module.time_ms() / fs.aortic_pressure_ramp_ms)
@@ -1120,8 +1149,15 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   }
   if (fs.aortic_pressure_mmhg > 0) {
     std::ostringstream m;
-    m << "aorta pre-tension: ground pressure " << fs.aortic_pressure_mmhg << " mmHg (outer load on the wall outside "
-      << "the Darcy region; ";
+    m << "aorta pre-tension: ground pressure " << fs.aortic_pressure_mmhg << " mmHg (";
+    if (aorta_prestress)
+      m << "a pre-stress of the wall: springs shortened by " << 100 * aorta_prestress->mean_strain << " % on average, "
+        << 100 * aorta_prestress->max_strain << " % at most (spring " << aorta_prestress->max_strain_spring << "), "
+        << aorta_prestress->compressed_springs << " pre-compressed (down to " << 100 * aorta_prestress->min_strain
+        << " %), equilibrium residual " << aorta_prestress->residual_relative
+        << " of the load; ";
+    else
+      m << "outer load on the wall outside the Darcy region; ";
     if (fs.aortic_pressure_ramp_ms > 0)
       m << "ramped over " << fs.aortic_pressure_ramp_ms << " ms from the blood at rest)";
     else

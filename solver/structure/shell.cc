@@ -302,6 +302,18 @@ void ShellModel::set_external_loads(std::vector<Vec3> force_mn) {
   compute_forces();
 }
 
+void ShellModel::set_rest_lengths_mm(const std::vector<double>& rest_length_mm) {
+  if (rest_length_mm.size() != springs_.size())
+    throw std::invalid_argument("set_rest_lengths_mm: " + std::to_string(rest_length_mm.size()) + " lengths for " +
+                                std::to_string(springs_.size()) + " springs of body '" + name_ + "'");
+  for (std::size_t k = 0; k < springs_.size(); ++k)
+    if (!(rest_length_mm[k] > 0 && std::isfinite(rest_length_mm[k])))
+      throw InputError(name_ + ": rest length " + fmt(rest_length_mm[k]) + " mm of spring " + std::to_string(springs_[k].i) +
+                       "-" + std::to_string(springs_[k].j) + " must be finite and > 0");
+  for (std::size_t k = 0; k < springs_.size(); ++k) springs_[k].rest_length_mm = rest_length_mm[k];
+  compute_forces();
+}
+
 void ShellModel::set_cavity_pressure(double pressure_kpa) {
   pressure_kpa_ = pressure_kpa;
   compute_forces();

@@ -119,6 +119,10 @@ class ShellModel {
   void set_external_loads(std::vector<Vec3> force_mn);  // size node_count(); caller's loads
   void set_cavity_pressure(double pressure_kpa);
   void set_active_tension(std::vector<double> tension_kpa);  // per node, >= 0 contracts
+  // Replaces the springs' rest lengths (per spring, springs() order; a pre-stress, ours:
+  // structure/prestress.h). Each must be finite and > 0; the masses, the springs' C, the hinges'
+  // rest angles and the active triangles stay those of the stress-free mesh. Recomputes the forces.
+  void set_rest_lengths_mm(const std::vector<double>& rest_length_mm);
   // Nodes held at their current position (besides the anchor-tagged ones).
   void fix_nodes(const std::vector<std::int32_t>& nodes);
   // Moves the fixed nodes rigidly: x = R X + t for their stress-free positions X (the anchors
