@@ -44,6 +44,7 @@ void validate(const FluidParameters& p, const grid::Grid& g) {
   if (!(p.abort_energy_growth > 1)) bad("abort_energy_growth", p.abort_energy_growth, "(1, inf)");
   if (!(p.abort_energy_floor >= 0 && std::isfinite(p.abort_energy_floor)))
     bad("abort_energy_floor", p.abort_energy_floor, "[0, inf)");
+  if (!(p.abort_min_dt >= 0 && p.abort_min_dt < p.max_dt)) bad("abort_min_dt", p.abort_min_dt, "[0, max_dt)");
   if (p.viscosity_model != "newtonian" && p.viscosity_model != "carreau_yasuda")
     throw InputError("fluid.viscosity_model = '" + p.viscosity_model + "' is unknown; known: newtonian, carreau_yasuda");
   if (p.viscosity_model == "carreau_yasuda") validate(p.carreau_yasuda);
@@ -146,6 +147,14 @@ double FluidSolver::choose_time_step(double t_limit) const {
     const double nu = max_viscosity();  // Carreau–Yasuda: the largest ν(γ̇) of the field
     const double lam = 4 / (g.dx() * g.dx()) + 4 / (g.dy() * g.dy()) + 4 / (g.dz() * g.dz());
     dt = std::min(dt, par_.viscous_safety / (nu * lam));
+    if (dt < par_.abort_min_dt) {
+      std::ostringstream place, what;
+      place << "step " << steps_ << ", fastest cell " << fastest_cell() << " (max |u|,|v|,|w| = " << max_u_ << ", "
+            << max_v_ << ", " << max_w_ << ")";
+      what << "the stable step " << dt << " fell below abort_min_dt " << par_.abort_min_dt
+           << " (the velocities or the viscosity grew " << par_.max_dt / dt << "-fold past those of the largest step)";
+      throw InstabilityError("fluid", place.str(), time_ * par_.time_scale_s, what.str());
+    }
   }
   // Land exactly on t_limit (round-off in t is absorbed); a leftover below ½Δt is avoided by
   // splitting the last 1.5Δt evenly (ours).

@@ -52,6 +52,10 @@ struct FluidParameters {
   // rest grows by large factors at negligible energy (an IB body set moving, a body force
   // switched on), which is not a blow-up. 1e-4 = an rms speed of 0.014 U_m. [0, inf).
   double abort_energy_floor = 1e-4;
+  // A CFL- or viscosity-limited step below this stops the run (InstabilityError naming the
+  // fastest cell, ours): velocities that grow while the adaptive step shrinks keep the realised
+  // CFL at its target, so without it a blowing-up run crawls on instead of stopping. 0: off. [0, max_dt).
+  double abort_min_dt = 0;
 };
 
 // Throws InputError naming the field, its value and the allowed range.

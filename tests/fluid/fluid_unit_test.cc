@@ -227,6 +227,35 @@ TEST(FluidSolver, DtAboveTheCflLimitStopsWithADiagnosis) {
   }
 }
 
+// The adaptive step keeps the realised CFL at its target however fast the flow gets, so a
+// blow-up would crawl on in ever smaller steps: a CFL step below abort_min_dt stops the run,
+// naming the fastest cell; with the guard off the same field just takes a small step.
+TEST(FluidSolver, AStepCollapsedBelowTheFloorStopsWithADiagnosis) {
+  const Slabs s(Grid({16, 16, 8, 2 * kPi, 2 * kPi, kPi}), MPI_COMM_WORLD);
+  auto run = [&](double min_dt) {
+    FluidParameters p;
+    p.reynolds = 3000;
+    p.max_dt = 0.1;
+    p.abort_min_dt = min_dt;
+    p.bottom_wall.kind = p.top_wall.kind = WallKind::free_slip;
+    FluidSolver f(s, p);
+    const double a = 1e4;  // CFL step 0.2 / (a (1/dx + 1/dy)) ~ 2.5e-6: 4e4 times below max_dt
+    f.set_velocity([a](double x, double y, double z) { return a * std::sin(x) * std::cos(y) * std::cos(z); },
+                   [a](double x, double y, double z) { return -a * std::cos(x) * std::sin(y) * std::cos(z); },
+                   [](double, double, double) { return 0.0; });
+    return f.advance();  // set_velocity measured the field: the first step is CFL-limited
+  };
+  EXPECT_LT(run(0.0), 1e-4);
+  try {
+    run(1e-4);
+    FAIL() << "not detected";
+  } catch (const InstabilityError& e) {
+    EXPECT_EQ(e.module(), "fluid");
+    EXPECT_NE(std::string(e.what()).find("abort_min_dt"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fastest cell (i,j,k) = ("), std::string::npos) << e.what();
+  }
+}
+
 TEST(FluidSolver, BlowUpIsDetectedByEnergyGrowthOrNonFiniteValues) {
   const Slabs s(Grid({16, 16, 8, 2 * kPi, 2 * kPi, kPi}), MPI_COMM_WORLD);
   FluidParameters p;
