@@ -330,6 +330,16 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     // closed valves' leak move a few % of the peak flow back and forth (ours)
     bs.valve_threshold_fraction = 0.05;
     std::map<std::string, double> m = diagnostics::to_map(diagnostics::compute_beat_metrics(bs));
+    // End-diastole is the window's start (ours): the scene starts every beat at the activation
+    // with the valves closed (MODEL.md §1), so EDV and EDP are the LV's volume and pressure
+    // there, not at the first mitral closure in the window (which, after a weak E wave, is a
+    // closure of the back-and-forth flow of a closed valve: EF −5 % for the first ejecting run,
+    // docs/fsei.md session 11). SV, EF and CO follow.
+    m["edv_ml"] = bs.lv_volume_ml.front();
+    m["lv_end_diastolic_pressure_mmhg"] = bs.lv_pressure_mmhg.front();
+    m["stroke_volume_ml"] = diagnostics::stroke_volume_ml(m["edv_ml"], m["esv_ml"]);
+    m["ejection_fraction_percent"] = diagnostics::ejection_fraction_percent(m["edv_ml"], m["esv_ml"]);
+    m["cardiac_output_l_min"] = diagnostics::cardiac_output_l_min(m["stroke_volume_ml"], m["heart_rate_bpm"]);
     for (const Peak& p : peaks) {
       const std::span<const double> v = window(p.series);
       double best = v[0];

@@ -106,7 +106,8 @@ TEST(FseiScene, PresetsAreTheIssuesGrids) {
 // aortic ejection A sin(π (t − 50)/250) on [50, 300] ms (60 ml), mitral filling
 // Q sin(π (t − 340)/460) on [340, 800] ms (60 ml), the LV volume their integral from 120 ml.
 // With valves "open" above 5 % of their peak: aortic closure where sin = 0.05 before 300 ms,
-// mitral closure where sin = 0.05 before 800 ms; ESV and EDV are the volumes there.
+// mitral closure where sin = 0.05 before 800 ms; ESV is the volume at the aortic closure, EDV
+// the volume at the beat's start (the activation: end-diastole by construction), 120 ml.
 TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   const double pi = std::acos(-1.0), T = 800;
   const double A = 60 / (250e-3 * 2 / pi), Q = 60 / (460e-3 * 2 / pi);  // ml/s: ∫ = 60 ml
@@ -134,7 +135,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   const auto beats = fsei_beat_metrics(series, T, "fsi");
   ASSERT_EQ(beats.size(), 2u);  // the half beat at the end is left out
   const double ao_close_ms = 300 - 250 * std::asin(0.05) / pi, mi_close_ms = 800 - 460 * std::asin(0.05) / pi;
-  const double esv = volume(ao_close_ms), edv = volume(mi_close_ms);
+  const double esv = volume(ao_close_ms), edv = volume(0);
   for (std::size_t b = 0; b < 2; ++b) {
     const auto& m = beats[b];
     EXPECT_EQ(m.at("beat"), static_cast<double>(b + 1));
@@ -144,6 +145,8 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
     EXPECT_NEAR(m.at("ejection_fraction_percent"), 100 * (edv - esv) / edv, 0.05);
     EXPECT_NEAR(m.at("cardiac_output_l_min"), (edv - esv) * 75 / 1000, 0.005);
     EXPECT_NEAR(m.at("aortic_valve_close_phase"), ao_close_ms / T, 2e-3);
+    EXPECT_NEAR(m.at("mitral_valve_close_phase"), mi_close_ms / T, 2e-3);
+    EXPECT_NEAR(m.at("lv_end_diastolic_pressure_mmhg"), 10, 1e-9);  // the pressure curve at the beat's start
     EXPECT_NEAR(m.at("mitral_valve_open_phase"), (340 + 460 * std::asin(0.05) / pi) / T, 2e-3);
     EXPECT_NEAR(m.at("lv_peak_pressure_mmhg"), 120, 0.01);
     EXPECT_NEAR(m.at("kinetic_energy_max_mj"), 0.8 * static_cast<double>(b + 1), 1e-12);  // the window's own
