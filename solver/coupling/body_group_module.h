@@ -27,6 +27,7 @@ class BodyGroupModule final : public Module {
   const std::string& name() const override { return name_; }
   double time_ms() const override { return group_.body(0).time_ms(); }
   double max_step_ms() const override { return group_.stable_step_ms(); }
+  std::string step_limiter() const override { return group_.stable_step_limiter(); }
   void step(double dt_ms) override { group_.substep(dt_ms); }
   void save() override {
     saved_.resize(group_.body_count());

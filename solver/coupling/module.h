@@ -26,6 +26,8 @@ class Module {
   virtual const std::string& name() const = 0;
   virtual double time_ms() const = 0;
   virtual double max_step_ms() const = 0;
+  // What sets max_step_ms() (a body, node, cell), for diagnoses; empty: not known.
+  virtual std::string step_limiter() const { return {}; }
   virtual void step(double dt_ms) = 0;
   virtual void save() = 0;
   virtual void restore() = 0;

@@ -370,6 +370,36 @@ double BodyGroup::stable_step_ms() const {
   return dt;
 }
 
+std::string BodyGroup::stable_step_limiter() const {
+  std::size_t body = 0;
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < bodies_.size(); ++k)
+    if (bodies_[k].stable_step_ms() < dt) {
+      dt = bodies_[k].stable_step_ms();
+      body = k;
+    }
+  std::ostringstream m;
+  if (!pairs_.empty()) {
+    double v2 = 0;
+    std::size_t vb = 0, vn = 0;
+    for (std::size_t k = 0; k < bodies_.size(); ++k) {
+      const auto& v = bodies_[k].velocities_mm_per_ms();
+      for (std::size_t i = 0; i < v.size(); ++i)
+        if (v[i].squaredNorm() > v2) {
+          v2 = v[i].squaredNorm();
+          vb = k;
+          vn = i;
+        }
+    }
+    if (v2 > 0 && 0.5 * options_.skin_mm / std::sqrt(v2) < dt) {
+      m << "contact skin: body '" << bodies_[vb].name() << "' node " << vn << " moving at " << std::sqrt(v2) << " m/s";
+      return m.str();
+    }
+  }
+  m << "body '" << bodies_[body].name() << "' " << bodies_[body].stable_step_limiter();
+  return m.str();
+}
+
 // The seed's rule: nodes of different bodies in one cell (side d_c) move together.
 void BodyGroup::average_shared_cells() {
   const double inv_h = 1 / options_.distance_mm;

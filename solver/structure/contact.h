@@ -81,6 +81,9 @@ class BodyGroup {
 
   // Smallest stable step of the bodies (contact stiffness included).
   double stable_step_ms() const;
+  // What sets stable_step_ms(): the body and its limiting node (ShellModel::stable_step_limiter),
+  // or the contact's skin / 2 per substep and the fastest node.
+  std::string stable_step_limiter() const;
   // Like ShellModel::advance, for all bodies together: n = ceil(T / stable step) equal substeps,
   // re-planned when the refreshed stable step falls below the substep; loads held; the same
   // strain, step-collapse and energy-growth checks, per body.

@@ -611,6 +611,22 @@ double ShellModel::stable_step_ms() const {
   return options_.time_step_safety * 2 / std::sqrt(omega2_);
 }
 
+std::string ShellModel::stable_step_limiter() const {
+  std::size_t worst = 0;
+  double w = -1;
+  for (std::size_t i = 0; i < x_.size(); ++i)
+    if (!fixed_[i] && row_[i] * inv_mass_[i] > w) {
+      w = row_[i] * inv_mass_[i];
+      worst = i;
+    }
+  std::ostringstream m;
+  m << "node " << worst << " at (" << x_[worst].x() << ", " << x_[worst].y() << ", " << x_[worst].z()
+    << ") mm, row/mass " << w << " /ms^2";
+  if (worst_edge_ >= 0)
+    m << "; worst edge " << springs_[worst_edge_].i << "-" << springs_[worst_edge_].j << " strain " << worst_strain_;
+  return m.str();
+}
+
 void ShellModel::substep(double dt) {
   begin_substep(dt);
   end_substep(dt);

@@ -143,6 +143,9 @@ class ShellModel {
   // evaluation (no extra pass). Pressure (follower) stiffness is not included (ours: it is
   // O(p A / l), small beside the membrane's).
   double stable_step_ms() const;
+  // What sets stable_step_ms(): "node N at (x, y, z) mm, Gershgorin row/mass R 1/ms^2; worst
+  // edge a-b strain e" (diagnoses, ours).
+  std::string stable_step_limiter() const;
   // Advances by T ms in n = ceil(T / stable step) equal substeps of velocity Verlet, loads held;
   // after every substep, when the (refreshed) stable step fell below the substep, the rest of T
   // is re-planned in equal smaller substeps (the Fung law stiffens). Throws InstabilityError("structure", "body B node

@@ -40,6 +40,7 @@ class Collapsing final : public Module {
   const std::string& name() const override { return name_; }
   double time_ms() const override { return t_; }
   double max_step_ms() const override { return limit_; }
+  std::string step_limiter() const override { return "cell (1,2,3)"; }
   void step(double dt) override {
     t_ += dt;
     limit_ *= 0.5;
@@ -155,6 +156,7 @@ TEST(Scheduler, ACollapsingStableStepIsDiagnosedWithTheModuleName) {
   } catch (const InstabilityError& e) {
     EXPECT_EQ(e.module(), "coupling");
     EXPECT_NE(std::string(e.what()).find("module 'collapsing' fell to"), std::string::npos) << e.what();
+    EXPECT_EQ(e.place(), "module collapsing, cell (1,2,3)");  // where the module says its step is set
   }
 }
 

@@ -407,3 +407,25 @@ TEST(StructureContact, BadOptionsAreRejected) {
 
 }  // namespace
 }  // namespace systole::structure
+
+namespace systole::structure {
+namespace {
+
+// A diagnosis of a collapsing step names what sets it (ours): the body with the smallest
+// stable step and its stiffest node. Here the smaller, stiffer sphere (its Gershgorin row per
+// mass is 4x the larger one's: the same mesh at half the size).
+TEST(BodyGroup, TheStableStepsLimiterIsTheStiffestBodysNode) {
+  auto small = icosphere(5, 2, 1.0, geometry::Tissue::kLvMyocardium, false);
+  small.name = "small";
+  auto large = icosphere(10, 2, 1.0, geometry::Tissue::kLvMyocardium, false);
+  large.name = "large";
+  for (auto& p : large.position_mm) p.x() += 40;  // far apart: no contact pair acts
+  BodyGroup group({ShellModel(large, seed_materials(), {}), ShellModel(small, seed_materials(), {})}, ContactOptions{});
+  const std::string what = group.stable_step_limiter();
+  EXPECT_NE(what.find("body 'small' node "), std::string::npos) << what;
+  EXPECT_NE(what.find("row/mass"), std::string::npos) << what;
+  EXPECT_EQ(group.stable_step_ms(), group.body(1).stable_step_ms());
+}
+
+}  // namespace
+}  // namespace systole::structure
