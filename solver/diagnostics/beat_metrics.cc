@@ -126,8 +126,13 @@ BeatMetrics compute_beat_metrics(const BeatSamples& b) {
       pressure = b.lv_pressure_mmhg[fallback];
     }
   };
-  at_phase_or(m.mitral_valve.close_phase, std::max_element(v.begin(), v.end()) - v.begin(),
-              m.edv_ml, m.lv_end_diastolic_pressure_mmhg);
+  if (b.end_diastole_at_beat_start) {
+    m.edv_ml = v.front();
+    m.lv_end_diastolic_pressure_mmhg = b.lv_pressure_mmhg.front();
+  } else {
+    at_phase_or(m.mitral_valve.close_phase, std::max_element(v.begin(), v.end()) - v.begin(),
+                m.edv_ml, m.lv_end_diastolic_pressure_mmhg);
+  }
   at_phase_or(m.aortic_valve.close_phase, std::min_element(v.begin(), v.end()) - v.begin(),
               m.esv_ml, m.lv_end_systolic_pressure_mmhg);
   m.stroke_volume_ml = stroke_volume_ml(m.edv_ml, m.esv_ml);

@@ -5,7 +5,8 @@
 // Conventions (documented in solver/diagnostics/README.md):
 //  - a beat is the window [beat_start_s, beat_start_s + period_s]; phase = (t - beat_start) / T;
 //  - flows are positive forward: mitral LA -> LV, aortic LV -> aorta;
-//  - end-diastole is the mitral valve closure, end-systole the aortic valve closure (the
+//  - end-diastole is the mitral valve closure (or the beat's first sample, with
+//    end_diastole_at_beat_start), end-systole the aortic valve closure (the
 //    first of each in the beat): EDV, EDP, ESV, ESP are the LV volume and pressure there,
 //    interpolated. If the beat has no such closure, EDV/ESV fall back to the largest/smallest
 //    LV volume (and the pressure at that sample). Not simply max/min: with leaky closed valves
@@ -33,6 +34,9 @@ struct BeatSamples {
   // A valve is "open" while its flow exceeds threshold_fraction * (peak |flow| of that valve
   // over the beat). 0 = sign changes (right for 0-D curves); noisy 3-D curves may want ~0.01.
   double valve_threshold_fraction = 0;
+  // true: end-diastole is the beat's first sample (EDV, EDP there) instead of the mitral
+  // closure, for beats that start at the activation with the valves closed (scenes fsi/fsei).
+  bool end_diastole_at_beat_start = false;
 };
 
 // Phases t/T in [0, 1] of the first opening (upward crossing) and the first closing

@@ -230,18 +230,14 @@ class AortaInterior {
 
 // The seed's aorta pre-tension (MODEL.md §1: "an external force providing a ground pressure of
 // 60 mmHg in the aortic root"), ours in detail: an outer pressure p on the aorta's wall, the
-// follower load p A n_in / 3 on each node of each loaded triangle (A its area, n_in its unit
-// normal into the lumen: the load pushes the wall inwards), at the given positions. The triangles of the Darcy
-// outflow (all three nodes tagged kOutflow) carry none: there the blood's pressure falls to the
-// outer fluid's, and an outer load would squeeze the tube shut. Adds to f (mN).
+// follower load p A n_in / 3 on each node of each loaded triangle (n_in into the lumen: the load
+// pushes the wall inwards; structure::pressure_nodal_forces), at the given positions. The
+// triangles of the Darcy outflow (all three nodes tagged kOutflow) carry none: there the blood's
+// pressure falls to the outer fluid's, and an outer load would squeeze the tube shut. Adds to f (mN).
 void add_outer_pressure_loads(const geometry::TriMesh& aorta, const std::vector<Vec3>& x_mm, double pressure_kpa,
                               std::vector<Vec3>& f_mn) {
-  const double k = pressure_kpa / 6;  // p (2 A n_in) / 6 = p A n_in / 3: into the lumen
-  for (const auto& t : aorta.tri) {
-    if ((aorta.region[t[0]] & aorta.region[t[1]] & aorta.region[t[2]] & geometry::kOutflow) != 0) continue;
-    const Vec3 fv = k * (x_mm[t[1]] - x_mm[t[0]]).cross(x_mm[t[2]] - x_mm[t[0]]);
-    for (int c = 0; c < 3; ++c) f_mn[t[c]] += fv;
-  }
+  const std::vector<Vec3> load = structure::pressure_nodal_forces(aorta, x_mm, pressure_kpa, geometry::kOutflow);
+  for (std::size_t i = 0; i < f_mn.size(); ++i) f_mn[i] += load[i];
 }
 
 }  // namespace
@@ -329,17 +325,12 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     // a valve is open while its flow exceeds 5 % of its peak: the leaflets' motion and the
     // closed valves' leak move a few % of the peak flow back and forth (ours)
     bs.valve_threshold_fraction = 0.05;
-    std::map<std::string, double> m = diagnostics::to_map(diagnostics::compute_beat_metrics(bs));
     // End-diastole is the window's start (ours): the scene starts every beat at the activation
-    // with the valves closed (MODEL.md §1), so EDV and EDP are the LV's volume and pressure
-    // there, not at the first mitral closure in the window (which, after a weak E wave, is a
-    // closure of the back-and-forth flow of a closed valve: EF −5 % for the first ejecting run,
-    // docs/fsei.md session 11). SV, EF and CO follow.
-    m["edv_ml"] = bs.lv_volume_ml.front();
-    m["lv_end_diastolic_pressure_mmhg"] = bs.lv_pressure_mmhg.front();
-    m["stroke_volume_ml"] = diagnostics::stroke_volume_ml(m["edv_ml"], m["esv_ml"]);
-    m["ejection_fraction_percent"] = diagnostics::ejection_fraction_percent(m["edv_ml"], m["esv_ml"]);
-    m["cardiac_output_l_min"] = diagnostics::cardiac_output_l_min(m["stroke_volume_ml"], m["heart_rate_bpm"]);
+    // with the valves closed (MODEL.md §1), not at the first mitral closure in the window
+    // (which, after a weak E wave, is a closure of a closed valve's back-and-forth flow: EF −5 %
+    // for the first ejecting run, docs/fsei.md session 11).
+    bs.end_diastole_at_beat_start = true;
+    std::map<std::string, double> m = diagnostics::to_map(diagnostics::compute_beat_metrics(bs));
     for (const Peak& p : peaks) {
       const std::span<const double> v = window(p.series);
       double best = v[0];

@@ -363,11 +363,19 @@ double BodyGroup::stable_step_ms() const {
   if (pairs_.empty()) return dt;
   // Contact detection: no node moves more than skin / 2 in one substep (ours), so the layer
   // cannot be crossed within a substep and approaching nodes are seen from outside the layer.
-  double v2 = 0;
-  for (const auto& b : bodies_)
-    for (const auto& v : b.velocities_mm_per_ms()) v2 = std::max(v2, v.squaredNorm());
+  const double v2 = fastest_node().v2;
   if (v2 > 0) dt = std::min(dt, 0.5 * options_.skin_mm / std::sqrt(v2));
   return dt;
+}
+
+BodyGroup::Fastest BodyGroup::fastest_node() const {
+  Fastest f;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    const auto& v = bodies_[k].velocities_mm_per_ms();
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (v[i].squaredNorm() > f.v2) f = {v[i].squaredNorm(), k, i};
+  }
+  return f;
 }
 
 std::string BodyGroup::stable_step_limiter() const {
@@ -380,19 +388,10 @@ std::string BodyGroup::stable_step_limiter() const {
     }
   std::ostringstream m;
   if (!pairs_.empty()) {
-    double v2 = 0;
-    std::size_t vb = 0, vn = 0;
-    for (std::size_t k = 0; k < bodies_.size(); ++k) {
-      const auto& v = bodies_[k].velocities_mm_per_ms();
-      for (std::size_t i = 0; i < v.size(); ++i)
-        if (v[i].squaredNorm() > v2) {
-          v2 = v[i].squaredNorm();
-          vb = k;
-          vn = i;
-        }
-    }
-    if (v2 > 0 && 0.5 * options_.skin_mm / std::sqrt(v2) < dt) {
-      m << "contact skin: body '" << bodies_[vb].name() << "' node " << vn << " moving at " << std::sqrt(v2) << " m/s";
+    const Fastest f = fastest_node();
+    if (f.v2 > 0 && 0.5 * options_.skin_mm / std::sqrt(f.v2) < dt) {
+      m << "contact skin: body '" << bodies_[f.body].name() << "' node " << f.node << " moving at " << std::sqrt(f.v2)
+        << " m/s";
       return m.str();
     }
   }

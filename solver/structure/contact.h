@@ -112,6 +112,13 @@ class BodyGroup {
   double contact_energy_uj() const { return stats_.energy_uj; }
 
  private:
+  // The fastest node of the group: |v|^2 (mm/ms)^2, its body and node (0 when all rest).
+  struct Fastest {
+    double v2 = 0;
+    std::size_t body = 0, node = 0;
+  };
+  Fastest fastest_node() const;
+
   struct Pair {
     std::size_t a, b;                       // nodes of a against the surface of b
     std::vector<std::int32_t> offset, tri;  // candidate triangles of b per node of a (CSR)
