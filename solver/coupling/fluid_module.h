@@ -20,7 +20,8 @@
 // - Outputs, at a synchronisation point: loads() = the hydrodynamic loads on every marker
 //   (eq 11–14) and the wall shear stress (eq 27) of the current state. The DV_b/Dt term of eq 14
 //   is taken as 0 (ours, this version: the structure hands over positions and velocities only).
-// - save()/restore(): the fluid's whole state in memory (FluidSolver::State), bitwise; the
+// - save()/restore(): the fluid's whole state in memory (FluidSolver::State) and the forcing's
+//   carried force (ibm::DirectForcing::carried_force, the carry-over's state), bitwise; the
 //   marker nodes are inputs, not state, and are kept (Module contract).
 #include <string>
 #include <vector>
@@ -52,8 +53,14 @@ class FluidModule final : public Module {
   double time_ms() const override { return fluid_.time() * options_.time_scale_ms; }
   double max_step_ms() const override { return fluid_.stable_step() * options_.time_scale_ms; }
   void step(double dt_ms) override;
-  void save() override { fluid_.save_state(saved_); }
-  void restore() override { fluid_.restore_state(saved_); }
+  void save() override {
+    fluid_.save_state(saved_);
+    saved_carried_ = forcing_.carried_force();
+  }
+  void restore() override {
+    fluid_.restore_state(saved_);
+    forcing_.set_carried_force(saved_carried_);
+  }
 
   // Input: a deformable body's node positions and velocities (grid units, sizes = the body's
   // tiled nodes; Markers::set_nodes checks them).
@@ -76,6 +83,7 @@ class FluidModule final : public Module {
   ibm::DirectForcing& forcing_;
   FluidModuleOptions options_;
   fluid::FluidSolver::State saved_;
+  std::vector<ibm::Vec3> saved_carried_;  // the forcing's carried force (carry-over) at save()
   bool moved_ = false;  // a body's nodes changed since the last step
 };
 

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "solver/core/errors.h"
 
@@ -48,6 +50,13 @@ SlipStats DirectForcing::slip_of(const std::vector<Vec3>& interpolated) const {
   }
   s.rms = s.markers ? std::sqrt(sum2 / static_cast<double>(s.markers)) : 0.0;
   return s;
+}
+
+void DirectForcing::set_carried_force(std::vector<Vec3> force) {
+  if (!force.empty() && force.size() != markers_.markers().size())
+    throw std::invalid_argument("DirectForcing::set_carried_force: " + std::to_string(force.size()) +
+                                " values for " + std::to_string(markers_.markers().size()) + " markers");
+  previous_ = std::move(force);
 }
 
 SlipStats DirectForcing::slip(const ConstVelocityView& u) const { return slip_of(transfer_.interpolate(u)); }

@@ -68,6 +68,12 @@ class DirectForcing {
   // F_b of the last apply() (per marker, force density; 0 for inactive markers).
   const std::vector<Vec3>& force_density() const { return force_; }
   const ForcingReport& last_report() const { return report_; }
+  // The carried force F^{n−1} (carry_over): state that the next step starts from, empty before
+  // the first step. A strong coupling's repeated interval and a checkpoint save and restore it
+  // with the fluid (else a restored run would not repeat bitwise). set_carried_force takes an
+  // empty vector or one value per marker (std::invalid_argument otherwise).
+  const std::vector<Vec3>& carried_force() const { return previous_; }
+  void set_carried_force(std::vector<Vec3> force);
   const Transfer& transfer() const { return transfer_; }
   const ForcingParameters& parameters() const { return par_; }
 

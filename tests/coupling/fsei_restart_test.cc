@@ -11,6 +11,7 @@
 // The resumed run's fields: "resume" writes into the straight run's OUTDIR, where the frames
 // continue (3 frames: 0, 0.5, 1 ms; the one at 1 ms is written again); "resume-fresh" empties
 // OUTDIR first: the frames before the checkpoint are left out of the xmf, with a note.
+// SCENE fsi_carry_over: fsi with fsei.forcing_carry_over (the carried force is checkpointed).
 #include <mpi.h>
 
 #include <cmath>
@@ -41,10 +42,13 @@ class Control final : public scene::RunControl {
   std::filesystem::path out_, checkpoint_;
 };
 
+// SCENE "fsi_carry_over": scene fsi with the carry-over forcing, whose carried force is state.
 RunResult run_case(const std::string& scene, const std::filesystem::path& out, const std::filesystem::path& checkpoint) {
+  const bool carry_over = scene == "fsi_carry_over";
   const nlohmann::json doc = {
-      {"scene", scene},
-      {"fsei", {{"end_time_ms", 1.0}, {"checkpoint_interval_ms", 0.6}, {"field_interval_ms", 0.5}}},
+      {"scene", carry_over ? "fsi" : scene},
+      {"fsei",
+       {{"end_time_ms", 1.0}, {"checkpoint_interval_ms", 0.6}, {"field_interval_ms", 0.5}, {"forcing_carry_over", carry_over}}},
       {"outputs", {{"time_series_interval_ms", 0.2}}}};
   const config::Scenario s = config::parse_scenario(doc);
   Control control(out, checkpoint);
