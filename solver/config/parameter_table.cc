@@ -552,6 +552,11 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of the previous step's "
                            "immersed-boundary force carried over (ours; below 1 the carried force cannot wind up "
                            "where the forcing cannot remove the slip, at the price of some slip: docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_cells, "", 0, 0, 4,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: markers within this many grid "
+                           "spacings of another body's markers carry no force over (ours; anti-windup where two "
+                           "bodies' targets conflict in one support, e.g. leaflets meeting at a commissure); 0: "
+                           "every marker carries. docs/fsei.md."));
   t.push_back(SYSTOLE_CHOICE(fsei.aortic_pretension, "outer_load",
                              (std::vector<std::string_view>{"outer_load", "prestress"}),
                              "Scenes 'fsei'/'fsi': how the aorta's wall holds fsei.aortic_pressure_mmhg (ours; the "

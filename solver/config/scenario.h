@@ -217,6 +217,7 @@ struct Fsei {
   bool aortic_outlet_held;              // the aorta's Darcy outlet (kOutflow nodes) held (ours)
   double forcing_carry_over_factor;     // ibm::ForcingParameters::carry_over_factor (ours)
   std::string aortic_pretension;        // "outer_load" | "prestress": how the wall holds the ground pressure (ours)
+  double forcing_carry_over_exclusion_cells;  // ibm::ForcingParameters::carry_over_exclusion_cells (ours)
 };
 
 struct Scenario {

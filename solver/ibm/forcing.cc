@@ -1,6 +1,9 @@
 #include "solver/ibm/forcing.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -20,6 +23,11 @@ void validate(const ForcingParameters& p) {
     m << "ibm carry-over factor = " << p.carry_over_factor << " is out of range (0, 1]";
     throw InputError(m.str());
   }
+  if (!(p.carry_over_exclusion_cells >= 0 && p.carry_over_exclusion_cells <= 4)) {
+    std::ostringstream m;
+    m << "ibm carry-over exclusion = " << p.carry_over_exclusion_cells << " cells is out of range [0, 4]";
+    throw InputError(m.str());
+  }
   if (!(p.rebuild_tolerance_cells >= 0 && p.rebuild_tolerance_cells <= 0.5)) {
     std::ostringstream m;
     m << "ibm rebuild tolerance = " << p.rebuild_tolerance_cells << " cells is out of range [0, 0.5]";
@@ -34,6 +42,53 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
     work_u_ = std::make_unique<grid::XFaceField>(slabs);
     work_v_ = std::make_unique<grid::YFaceField>(slabs);
     work_w_ = std::make_unique<grid::ZFaceField>(slabs);
+  }
+  update_carry_mask();
+}
+
+// Cells of size r h over the markers' positions (grid units), sorted by cell key; a marker is
+// excluded when a marker of another body lies within r h (the 27 neighbouring cells checked).
+// The box is not wrapped periodically (bodies stay clear of the x, y faces). Same result on
+// every rank (all ranks hold all markers).
+void DirectForcing::update_carry_mask() {
+  carries_.clear();
+  excluded_ = 0;
+  if (!par_.carry_over || par_.carry_over_exclusion_cells <= 0) return;
+  const MarkerArrays& m = markers_.markers();
+  const std::size_t n = m.size();
+  const double r = par_.carry_over_exclusion_cells * markers_.h(), r2 = r * r;
+  auto cell = [&](const Vec3& x) {
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(x.x() / r)),
+                                       static_cast<std::int64_t>(std::floor(x.y() / r)),
+                                       static_cast<std::int64_t>(std::floor(x.z() / r))};
+  };
+  auto key = [](const std::array<std::int64_t, 3>& c) {
+    return ((c[2] + (1 << 20)) << 42) | ((c[1] + (1 << 20)) << 21) | (c[0] + (1 << 20));
+  };
+  std::vector<std::pair<std::int64_t, std::int32_t>> sorted(n);
+  for (std::size_t b = 0; b < n; ++b) sorted[b] = {key(cell(m.position[b])), static_cast<std::int32_t>(b)};
+  std::sort(sorted.begin(), sorted.end());
+  carries_.assign(n, 1);
+  for (std::size_t b = 0; b < n; ++b) {
+    const auto c = cell(m.position[b]);
+    bool near_other = false;
+    for (int dz = -1; dz <= 1 && !near_other; ++dz)
+      for (int dy = -1; dy <= 1 && !near_other; ++dy)
+        for (int dx = -1; dx <= 1 && !near_other; ++dx) {
+          const std::int64_t k = key({c[0] + dx, c[1] + dy, c[2] + dz});
+          auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(k, std::int32_t{-1}));
+          for (; it != sorted.end() && it->first == k; ++it) {
+            const auto o = static_cast<std::size_t>(it->second);
+            if (m.body[o] != m.body[b] && (m.position[o] - m.position[b]).squaredNorm() < r2) {
+              near_other = true;
+              break;
+            }
+          }
+        }
+    if (near_other) {
+      carries_[b] = 0;
+      ++excluded_;
+    }
   }
 }
 
@@ -83,7 +138,8 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   if (par_.carry_over && previous_.size() == n) {
     // Start from the previous step's force (active markers only), then correct what it leaves.
     for (std::size_t b = 0; b < n; ++b)
-      force_[b] = markers_.active(b) ? Vec3(par_.carry_over_factor * previous_[b]) : Vec3::Zero();
+      force_[b] = markers_.active(b) && (carries_.empty() || carries_[b]) ? Vec3(par_.carry_over_factor * previous_[b])
+                                                                         : Vec3::Zero();
     transfer_.spread(force_, f);
     update(u_hat.u, f.u, *work_u_);
     update(u_hat.v, f.v, *work_v_);

@@ -31,6 +31,11 @@ struct ForcingParameters {
   // one support) no longer winds the force up without bound (F ≤ correction / (1 − β)), at the
   // price of a steady slip (1 − β) times the one without carry-over.
   double carry_over_factor = 1.0;
+  // With carry_over: markers within this × h of a marker of another body carry nothing over
+  // (ours), [0, 4]; 0: every marker carries. Anti-windup: where two bodies' supports overlap
+  // (leaflets meeting at a commissure, a leaflet at its annulus) their targets can conflict, the
+  // slip there cannot be removed, and the carried force would grow step after step.
+  double carry_over_exclusion_cells = 0.0;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
   double rebuild_tolerance_cells = 0;
@@ -61,7 +66,12 @@ class DirectForcing {
   // to the interpolated û (exact: Σφ = 1), so the markers see û + Δt g. Add g to f after apply().
   const ForcingReport& apply(double dt, const ConstVelocityView& u_hat, VelocityView f,
                              const Vec3& uniform_force = Vec3::Zero());
-  void markers_moved() { transfer_.rebuild(); }
+  void markers_moved() {
+    transfer_.rebuild();
+    update_carry_mask();
+  }
+  // Markers excluded from the carry-over (carry_over_exclusion_cells) at the last update.
+  std::size_t carry_over_excluded() const { return excluded_; }
 
   // Slip of a velocity field (halos valid) at the active markers. Collective.
   SlipStats slip(const ConstVelocityView& u) const;
@@ -79,12 +89,15 @@ class DirectForcing {
 
  private:
   SlipStats slip_of(const std::vector<Vec3>& interpolated) const;
+  void update_carry_mask();  // carries_ from the markers' positions (carry_over_exclusion_cells)
   const grid::Slabs& slabs_;
   const Markers& markers_;
   ForcingParameters par_;
   Transfer transfer_;
   std::vector<Vec3> force_, increment_, previous_, interpolated_;
   ForcingReport report_;
+  std::vector<char> carries_;  // per marker: 1 = its force is carried over (empty: all)
+  std::size_t excluded_ = 0;
   // Work velocity û + Δt f of the multi-direct passes (allocated when iterations > 1).
   std::unique_ptr<grid::XFaceField> work_u_;
   std::unique_ptr<grid::YFaceField> work_v_;

@@ -577,6 +577,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   ibm::ForcingParameters forcing_parameters;
   forcing_parameters.carry_over = fs.forcing_carry_over;
   forcing_parameters.carry_over_factor = fs.forcing_carry_over_factor;
+  forcing_parameters.carry_over_exclusion_cells = fs.forcing_carry_over_exclusion_cells;
   forcing_parameters.iterations = fs.forcing_iterations;
   forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
   ibm::DirectForcing forcing(slabs, markers, forcing_parameters);
@@ -1157,6 +1158,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
     result.notes.push_back(m.str());
   }
+  if (forcing_parameters.carry_over && forcing_parameters.carry_over_exclusion_cells > 0)
+    result.notes.push_back(std::string("carry-over forcing: ") + std::to_string(forcing.carry_over_excluded()) + " of " +
+                           std::to_string(markers.size()) + " markers (those within " +
+                           std::to_string(forcing_parameters.carry_over_exclusion_cells) +
+                           " h of another body's, at the end) carry nothing over");
   if (fields) {
     result.notes.push_back(std::to_string(fields->frames()) + " field frames every " + std::to_string(fs.field_interval_ms) +
                            " ms: fsei_fields.xmf (fluid fsei_fluid_<k>.h5, bodies fsei_bodies.h5)");

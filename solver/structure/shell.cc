@@ -624,6 +624,31 @@ std::string ShellModel::stable_step_limiter() const {
     << ") mm, row/mass " << w << " /ms^2";
   if (worst_edge_ >= 0)
     m << "; worst edge " << springs_[worst_edge_].i << "-" << springs_[worst_edge_].j << " strain " << worst_strain_;
+  // The flattest triangle at that node (ours): a triangle squeezed flat in its plane (its
+  // smallest height far below the stress-free one) while its edges stay within the strain limit
+  // makes the bending hinges across its edges stiffen as 1/height; name it when it is at less
+  // than half its stress-free height.
+  double flattest = 1e300;
+  std::size_t flat_t = 0;
+  auto min_height = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    const double twice_area = (b - a).cross(c - a).norm();
+    return twice_area / std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  };
+  for (std::size_t t = 0; t < mesh_.tri.size(); ++t) {
+    const auto& tr = mesh_.tri[t];
+    if (tr[0] != static_cast<int>(worst) && tr[1] != static_cast<int>(worst) && tr[2] != static_cast<int>(worst)) continue;
+    const double h0 = min_height(mesh_.position_mm[tr[0]], mesh_.position_mm[tr[1]], mesh_.position_mm[tr[2]]);
+    const double ratio = min_height(x_[tr[0]], x_[tr[1]], x_[tr[2]]) / h0;
+    if (ratio < flattest) {
+      flattest = ratio;
+      flat_t = t;
+    }
+  }
+  if (flattest < 0.5) {
+    const auto& tr = mesh_.tri[flat_t];
+    m << "; triangle " << flat_t << " (nodes " << tr[0] << ", " << tr[1] << ", " << tr[2] << ") squeezed flat to "
+      << flattest << " of its stress-free height (an in-plane collapse)";
+  }
   return m.str();
 }
 

@@ -144,7 +144,8 @@ class ShellModel {
   // O(p A / l), small beside the membrane's).
   double stable_step_ms() const;
   // What sets stable_step_ms(): "node N at (x, y, z) mm, Gershgorin row/mass R 1/ms^2; worst
-  // edge a-b strain e" (diagnoses, ours).
+  // edge a-b strain e" and, when one of that node's triangles is below half its stress-free
+  // height, "triangle T (nodes ...) squeezed flat to r of its stress-free height" (diagnoses, ours).
   std::string stable_step_limiter() const;
   // Advances by T ms in n = ceil(T / stable step) equal substeps of velocity Verlet, loads held;
   // after every substep, when the (refreshed) stable step fell below the substep, the rest of T

@@ -118,7 +118,9 @@ TEST_P(FluidModuleRestore, RepeatsAnIntervalBitwise) {
   EXPECT_EQ(std::memcmp(first.u.data(), a.fluid.velocity().u.data(), first.u.bytes()), 0);
   EXPECT_EQ(std::memcmp(first.w.data(), a.fluid.velocity().w.data(), first.w.bytes()), 0);
   EXPECT_EQ(std::memcmp(first_p.data(), a.fluid.pressure().data(), first_p.bytes()), 0);
-  if (GetParam()) EXPECT_FALSE(a.forcing->carried_force().empty());
+  if (GetParam()) {
+    EXPECT_FALSE(a.forcing->carried_force().empty());
+  }
 }
 INSTANTIATE_TEST_SUITE_P(CarryOver, FluidModuleRestore, ::testing::Bool(),
                          [](const auto& info) { return info.param ? "carried_force" : "seed_forcing"; });

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "solver/core/errors.h"
+#include "solver/ibm/forcing.h"
 #include "solver/ibm/markers.h"
 #include "solver/geometry/tiling.h"
 #include "solver/ibm/shapes.h"
@@ -21,6 +22,43 @@ BodyOptions unit_options(ExpectedNormals n = ExpectedNormals::unchecked) {
   o.mm_per_unit = 24.0;
   o.normals = n;
   return o;
+}
+
+// The carry-over's anti-windup (ForcingParameters::carry_over_exclusion_cells, ours): the
+// markers within r h of another body's marker carry nothing over; exactly those, by brute force.
+// Two spheres of diameter 0.5 whose surfaces are 0.1 (one h) apart.
+TEST(CarryOverExclusion, MarkersNearAnotherBodyAreExactlyTheExcludedOnes) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
+  for (double gap_mm : {2.4, 12.0}) {  // 0.1 and 0.5 in grid units (1 h and 5 h)
+    Markers m(kGrid);
+    m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", unit_options());
+    m.add_body(sphere_mesh(Vec3(24 + gap_mm, 24, 24), 6, 2), "right", unit_options());
+    for (double cells : {0.0, 2.0, 3.0}) {
+      ForcingParameters p;
+      p.carry_over = true;
+      p.carry_over_exclusion_cells = cells;
+      const DirectForcing forcing(slabs, m, p);
+      std::size_t near = 0;
+      const auto& a = m.markers();
+      for (std::size_t i = 0; i < a.size(); ++i)
+        for (std::size_t j = 0; j < a.size(); ++j)
+          if (a.body[i] != a.body[j] && (a.position[i] - a.position[j]).norm() < cells * m.h()) {
+            ++near;
+            break;
+          }
+      std::printf("  [measured] gap %.1f h, exclusion %.0f h: %zu of %zu markers excluded\n", gap_mm / 24 / m.h(),
+                  cells, forcing.carry_over_excluded(), m.size());
+      EXPECT_EQ(forcing.carry_over_excluded(), near);
+      if (gap_mm < 10 && cells >= 2) {
+        EXPECT_GT(near, 0u);
+        EXPECT_LT(near, m.size() / 2);
+      }
+      if (gap_mm > 10 || cells == 0) EXPECT_EQ(near, 0u);
+    }
+  }
+  ForcingParameters bad;
+  bad.carry_over_exclusion_cells = 5;
+  EXPECT_THROW(validate(bad), InputError);
 }
 
 TEST(Markers, OneMarkerPerTileWithAreaNormalAndBody) {

@@ -252,6 +252,27 @@ TEST(StructureConstraints, AnchorsStayAndMoveRigidlyWhenTold) {
 namespace systole::structure {
 namespace {
 
+// A collapsing step's diagnosis names a triangle squeezed flat in its plane (ours): one node of
+// a triangle moved to 5 % of the triangle's height from its opposite edge (in the triangle's
+// plane, so the sphere does not fold) makes the hinges across that triangle's edges the stiffest
+// rows; the undisturbed sphere has no such note.
+TEST(StructureDiagnoses, TheStepLimiterNamesATriangleSqueezedFlat) {
+  const auto mesh = icosphere(10, 2, 1.5, Tissue::kLvMyocardium, true);
+  ShellModel body(mesh, seed_materials(), ShellOptions{});
+  EXPECT_EQ(body.stable_step_limiter().find("squeezed flat"), std::string::npos) << body.stable_step_limiter();
+  const double step_before = body.stable_step_ms();
+  std::vector<Vec3> x = mesh.position_mm;
+  const auto& t = mesh.tri[0];
+  const Vec3 a = x[t[1]], b = x[t[2]];
+  const Vec3 foot = a + (x[t[0]] - a).dot(b - a) / (b - a).squaredNorm() * (b - a);
+  x[t[0]] = foot + 0.05 * (x[t[0]] - foot);
+  body.set_state(x, std::vector<Vec3>(x.size(), Vec3::Zero()));
+  const std::string what = body.stable_step_limiter();
+  std::printf("  [measured] stable step %.3g -> %.3g ms: %s\n", step_before, body.stable_step_ms(), what.c_str());
+  EXPECT_LT(body.stable_step_ms(), 0.5 * step_before);
+  EXPECT_NE(what.find("squeezed flat to 0.05"), std::string::npos) << what;
+}
+
 TEST(StructureThreads, TwoThreadsGiveTheSameForcesAndStableStep) {
   const auto mesh = icosphere(10, 3, 1.5, geometry::Tissue::kLvMyocardium, true);
   const auto x = perturbed(mesh.position_mm, 0.2, 17);
