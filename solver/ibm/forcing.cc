@@ -46,10 +46,8 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
   update_carry_mask();
 }
 
-// Cells of size r h over the markers' positions (grid units), sorted by cell key; a marker of a
-// deformable body is excluded when a marker of another deformable body lies within r h (the 27
-// neighbouring cells checked). Rigid bodies (the valvular plane) neither are excluded nor exclude:
-// the walls and leaflets are anchored to them with the same velocity, so their targets agree.
+// Cells of size r h over the markers' positions (grid units), sorted by cell key; a marker is
+// excluded when a marker of another body lies within r h (the 27 neighbouring cells checked).
 // The box is not wrapped periodically (bodies stay clear of the x, y faces). Same result on
 // every rank (all ranks hold all markers).
 void DirectForcing::update_carry_mask() {
@@ -70,11 +68,8 @@ void DirectForcing::update_carry_mask() {
   std::vector<std::pair<std::int64_t, std::int32_t>> sorted(n);
   for (std::size_t b = 0; b < n; ++b) sorted[b] = {key(cell(m.position[b])), static_cast<std::int32_t>(b)};
   std::sort(sorted.begin(), sorted.end());
-  std::vector<char> rigid;
-  for (const Body& body : markers_.bodies()) rigid.push_back(body.options.rigid ? 1 : 0);
   carries_.assign(n, 1);
   for (std::size_t b = 0; b < n; ++b) {
-    if (rigid[m.body[b]]) continue;
     const auto c = cell(m.position[b]);
     bool near_other = false;
     for (int dz = -1; dz <= 1 && !near_other; ++dz)
@@ -84,7 +79,7 @@ void DirectForcing::update_carry_mask() {
           auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(k, std::int32_t{-1}));
           for (; it != sorted.end() && it->first == k; ++it) {
             const auto o = static_cast<std::size_t>(it->second);
-            if (m.body[o] != m.body[b] && !rigid[m.body[o]] && (m.position[o] - m.position[b]).squaredNorm() < r2) {
+            if (m.body[o] != m.body[b] && (m.position[o] - m.position[b]).squaredNorm() < r2) {
               near_other = true;
               break;
             }

@@ -31,12 +31,12 @@ struct ForcingParameters {
   // one support) no longer winds the force up without bound (F ≤ correction / (1 − β)), at the
   // price of a steady slip (1 − β) times the one without carry-over.
   double carry_over_factor = 1.0;
-  // With carry_over: markers of a deformable body within this × h of a marker of another
-  // deformable body carry nothing over (ours), [0, 4]; 0: every marker carries. Anti-windup:
-  // where two bodies' supports overlap (leaflets meeting at a commissure, a leaflet along the
-  // atrial wall) their targets can conflict, the slip there cannot be removed, and the carried
-  // force would grow step after step. Rigid bodies are left out (their anchored neighbours
-  // share their velocity).
+  // With carry_over: markers within this × h of a marker of another body carry nothing over
+  // (ours), [0, 4]; 0: every marker carries. Anti-windup: where two bodies' supports overlap
+  // (leaflets meeting at a commissure, a leaflet at its annulus) their targets can conflict, the
+  // slip there cannot be removed, and the carried force would grow step after step. Rigid
+  // bodies count too: leaving the valvular plane out, the heart's cusps crumpled at 16.6 ms
+  // (docs/fsei.md, session 12).
   double carry_over_exclusion_cells = 0.0;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.

@@ -25,17 +25,14 @@ BodyOptions unit_options(ExpectedNormals n = ExpectedNormals::unchecked) {
 }
 
 // The carry-over's anti-windup (ForcingParameters::carry_over_exclusion_cells, ours): the
-// markers of deformable bodies within r h of another deformable body's marker carry nothing
-// over; exactly those, by brute force; a rigid neighbour excludes nothing. Two spheres of
-// diameter 0.5 whose surfaces are 0.1 (one h) apart.
+// markers within r h of another body's marker carry nothing over; exactly those, by brute force.
+// Two spheres of diameter 0.5 whose surfaces are 0.1 (one h) apart.
 TEST(CarryOverExclusion, MarkersNearAnotherBodyAreExactlyTheExcludedOnes) {
   const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
-  BodyOptions deformable = unit_options();
-  deformable.rigid = false;
   for (double gap_mm : {2.4, 12.0}) {  // 0.1 and 0.5 in grid units (1 h and 5 h)
     Markers m(kGrid);
-    m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", deformable);
-    m.add_body(sphere_mesh(Vec3(24 + gap_mm, 24, 24), 6, 2), "right", deformable);
+    m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", unit_options());
+    m.add_body(sphere_mesh(Vec3(24 + gap_mm, 24, 24), 6, 2), "right", unit_options());
     for (double cells : {0.0, 2.0, 3.0}) {
       ForcingParameters p;
       p.carry_over = true;
@@ -60,15 +57,6 @@ TEST(CarryOverExclusion, MarkersNearAnotherBodyAreExactlyTheExcludedOnes) {
         EXPECT_EQ(near, 0u);
       }
     }
-  }
-  {  // the right sphere rigid: nothing excluded
-    Markers m(kGrid);
-    m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", deformable);
-    m.add_body(sphere_mesh(Vec3(26.4, 24, 24), 6, 2), "right", unit_options());
-    ForcingParameters p;
-    p.carry_over = true;
-    p.carry_over_exclusion_cells = 3;
-    EXPECT_EQ(DirectForcing(slabs, m, p).carry_over_excluded(), 0u);
   }
   ForcingParameters bad;
   bad.carry_over_exclusion_cells = 5;
