@@ -46,40 +46,47 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
   update_carry_mask();
 }
 
-// Cells of size r h over the markers' positions (grid units), sorted by cell key; a marker is
-// excluded when a marker of another body lies within r h (the 27 neighbouring cells checked).
-// The box is not wrapped periodically (bodies stay clear of the x, y faces). Same result on
-// every rank (all ranks hold all markers).
+// A counting sort of the markers into cells of size r h over the box (grid units; markers lie
+// inside it, Markers checks that); a marker is excluded when a marker of another body lies
+// within r h (the 27 neighbouring cells checked). O(markers + cells); the box is not wrapped
+// periodically (bodies stay clear of the x, y faces). Same result on every rank (all ranks hold
+// all markers).
 void DirectForcing::update_carry_mask() {
   carries_.clear();
   excluded_ = 0;
   if (!par_.carry_over || par_.carry_over_exclusion_cells <= 0) return;
   const MarkerArrays& m = markers_.markers();
   const std::size_t n = m.size();
+  const grid::Grid& g = slabs_.grid();
   const double r = par_.carry_over_exclusion_cells * markers_.h(), r2 = r * r;
-  auto cell = [&](const Vec3& x) {
-    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(x.x() / r)),
-                                       static_cast<std::int64_t>(std::floor(x.y() / r)),
-                                       static_cast<std::int64_t>(std::floor(x.z() / r))};
+  const std::array<int, 3> dims{static_cast<int>(g.lx() / r) + 1, static_cast<int>(g.ly() / r) + 1,
+                                static_cast<int>(g.lz() / r) + 1};
+  auto coord = [&](double x, int d) { return std::clamp(static_cast<int>(std::floor(x / r)), 0, dims[d] - 1); };
+  auto index = [&](int i, int j, int k) {
+    return static_cast<std::size_t>(i) + static_cast<std::size_t>(dims[0]) * (j + static_cast<std::size_t>(dims[1]) * k);
   };
-  auto key = [](const std::array<std::int64_t, 3>& c) {
-    return ((c[2] + (1 << 20)) << 42) | ((c[1] + (1 << 20)) << 21) | (c[0] + (1 << 20));
-  };
-  std::vector<std::pair<std::int64_t, std::int32_t>> sorted(n);
-  for (std::size_t b = 0; b < n; ++b) sorted[b] = {key(cell(m.position[b])), static_cast<std::int32_t>(b)};
-  std::sort(sorted.begin(), sorted.end());
+  const std::size_t cells = index(0, 0, dims[2]);
+  std::vector<std::size_t> start(cells + 1, 0), cell_of(n), order(n);
+  for (std::size_t b = 0; b < n; ++b) {
+    const Vec3& x = m.position[b];
+    cell_of[b] = index(coord(x.x(), 0), coord(x.y(), 1), coord(x.z(), 2));
+    ++start[cell_of[b] + 1];
+  }
+  for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t b = 0; b < n; ++b) order[fill[cell_of[b]]++] = b;
   carries_.assign(n, 1);
   for (std::size_t b = 0; b < n; ++b) {
-    const auto c = cell(m.position[b]);
+    const Vec3& x = m.position[b];
+    const int ci = coord(x.x(), 0), cj = coord(x.y(), 1), ck = coord(x.z(), 2);
     bool near_other = false;
-    for (int dz = -1; dz <= 1 && !near_other; ++dz)
-      for (int dy = -1; dy <= 1 && !near_other; ++dy)
-        for (int dx = -1; dx <= 1 && !near_other; ++dx) {
-          const std::int64_t k = key({c[0] + dx, c[1] + dy, c[2] + dz});
-          auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(k, std::int32_t{-1}));
-          for (; it != sorted.end() && it->first == k; ++it) {
-            const auto o = static_cast<std::size_t>(it->second);
-            if (m.body[o] != m.body[b] && (m.position[o] - m.position[b]).squaredNorm() < r2) {
+    for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)
+      for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !near_other; ++j)
+        for (int i = std::max(ci - 1, 0); i <= std::min(ci + 1, dims[0] - 1) && !near_other; ++i) {
+          const std::size_t c = index(i, j, k);
+          for (std::size_t q = start[c]; q < start[c + 1]; ++q) {
+            const std::size_t o = order[q];
+            if (m.body[o] != m.body[b] && (m.position[o] - x).squaredNorm() < r2) {
               near_other = true;
               break;
             }

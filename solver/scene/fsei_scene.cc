@@ -1158,11 +1158,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
     result.notes.push_back(m.str());
   }
-  if (forcing_parameters.carry_over && forcing_parameters.carry_over_exclusion_cells > 0)
-    result.notes.push_back(std::string("carry-over forcing: ") + std::to_string(forcing.carry_over_excluded()) + " of " +
-                           std::to_string(markers.size()) + " markers (those within " +
-                           std::to_string(forcing_parameters.carry_over_exclusion_cells) +
-                           " h of another body's, at the end) carry nothing over");
+  if (forcing_parameters.carry_over && forcing_parameters.carry_over_exclusion_cells > 0) {
+    std::ostringstream m;
+    m << "carry-over forcing: " << forcing.carry_over_excluded() << " of " << markers.size() << " markers (those within "
+      << forcing_parameters.carry_over_exclusion_cells << " h of another body's, at the end) carry nothing over";
+    result.notes.push_back(m.str());
+  }
   if (fields) {
     result.notes.push_back(std::to_string(fields->frames()) + " field frames every " + std::to_string(fs.field_interval_ms) +
                            " ms: fsei_fields.xmf (fluid fsei_fluid_<k>.h5, bodies fsei_bodies.h5)");
