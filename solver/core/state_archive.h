@@ -33,6 +33,23 @@ class StateArchive {
     return it->second;
   }
   double scalar(const std::string& name) const { return get(name, 1)[0]; }
+  // Arrays of 3-vectors (any type with v[0..2] and a (x, y, z) constructor), stored flat.
+  template <class V>
+  void put_vectors(const std::string& name, const std::vector<V>& v) {
+    std::vector<double> flat(3 * v.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (std::size_t c = 0; c < 3; ++c) flat[3 * i + c] = v[i][static_cast<int>(c)];
+    put(name, std::move(flat));
+  }
+  // expected_count >= 0: the number of vectors this run needs (InputError otherwise, as get()).
+  template <class V>
+  std::vector<V> get_vectors(const std::string& name, long expected_count = -1) const {
+    const std::vector<double>& d = get(name, expected_count >= 0 ? 3 * expected_count : -1);
+    std::vector<V> out;
+    out.reserve(d.size() / 3);
+    for (std::size_t i = 0; i + 2 < d.size(); i += 3) out.emplace_back(d[i], d[i + 1], d[i + 2]);
+    return out;
+  }
   const std::map<std::string, std::vector<double>>& entries() const { return entries_; }
 
  private:

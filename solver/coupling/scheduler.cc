@@ -73,12 +73,13 @@ void Scheduler::sub_cycle(std::size_t stage, double t_end_ms) {
   while (t_end_ms - m.time_ms() > landing) {
     const double left = t_end_ms - m.time_ms();
     const double limit = m.max_step_ms();
-    if (!std::isfinite(limit) || limit < options_.min_step_ms)
-      throw InstabilityError("coupling",
-                             "module " + m.name() + (m.step_limiter().empty() ? "" : ", " + m.step_limiter()),
+    if (!std::isfinite(limit) || limit < options_.min_step_ms) {
+      const std::string limiter = m.step_limiter();
+      throw InstabilityError("coupling", "module " + m.name() + (limiter.empty() ? "" : ", " + limiter),
                              m.time_ms() / 1000,
                              "the stable step of module '" + m.name() + "' fell to " + number(limit) +
                                  " ms, below the floor min_step_ms = " + number(options_.min_step_ms) + " ms");
+    }
     // Split what is left of the interval evenly: no sliver of a last substep (ours).
     const double allowed = options_.step_limit_factor * limit;
     const double substeps = std::ceil(left / allowed * (1 - 1e-12));

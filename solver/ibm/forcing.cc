@@ -121,6 +121,15 @@ void DirectForcing::set_carried_force(std::vector<Vec3> force) {
   previous_ = std::move(force);
 }
 
+void DirectForcing::export_state(StateArchive& archive, const std::string& prefix) const {
+  if (!previous_.empty()) archive.put_vectors(prefix + "carried_force", previous_);
+}
+
+void DirectForcing::import_state(const StateArchive& archive, const std::string& prefix) {
+  if (archive.has(prefix + "carried_force"))
+    set_carried_force(archive.get_vectors<Vec3>(prefix + "carried_force", static_cast<long>(markers_.markers().size())));
+}
+
 SlipStats DirectForcing::slip(const ConstVelocityView& u) const { return slip_of(transfer_.interpolate(u)); }
 
 const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_hat, VelocityView f,

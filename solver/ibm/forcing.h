@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "solver/core/state_archive.h"
 #include "solver/ibm/transfer.h"
 
 namespace systole::ibm {
@@ -86,6 +87,10 @@ class DirectForcing {
   // empty vector or one value per marker (std::invalid_argument otherwise).
   const std::vector<Vec3>& carried_force() const { return previous_; }
   void set_carried_force(std::vector<Vec3> force);
+  // The carried force in a checkpoint, under prefix + "carried_force" (written only when there is
+  // one; a missing entry restores none). Identical on every rank (global marker forces).
+  void export_state(StateArchive& archive, const std::string& prefix) const;
+  void import_state(const StateArchive& archive, const std::string& prefix);
   const Transfer& transfer() const { return transfer_; }
   const ForcingParameters& parameters() const { return par_; }
 

@@ -774,12 +774,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (resume_from) {
     fluid.restore_checkpoint(*resume_from / "fluid.h5");
     group.import_state(resumed, "structure/");
-    if (resumed.has("ibm/carried_force")) {  // the carry-over forcing's state (absent: none yet)
-      const std::vector<double>& c = resumed.get("ibm/carried_force", 3 * static_cast<long>(markers.markers().size()));
-      std::vector<ibm::Vec3> carried(c.size() / 3);
-      for (std::size_t b = 0; b < carried.size(); ++b) carried[b] = ibm::Vec3(c[3 * b], c[3 * b + 1], c[3 * b + 2]);
-      forcing.set_carried_force(std::move(carried));
-    }
+    forcing.import_state(resumed, "ibm/");  // the carry-over forcing's carried force, if any
     std::vector<double> d;
     nodes.read(d);
     nodes.write(d);
@@ -954,12 +949,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         StateArchive a;
         a.put_scalar("scene/time_ms", t);
         group.export_state(a, "structure/");
-        if (!forcing.carried_force().empty()) {  // identical on every rank (global marker forces)
-          std::vector<double> c;
-          c.reserve(3 * forcing.carried_force().size());
-          for (const ibm::Vec3& f : forcing.carried_force()) c.insert(c.end(), {f.x(), f.y(), f.z()});
-          a.put("ibm/carried_force", std::move(c));
-        }
+        forcing.export_state(a, "ibm/");
         if (with_ep) {
           tissue->export_state(a, "ep/");
           ep_module->export_state(a, "ep_module/");

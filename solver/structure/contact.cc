@@ -299,28 +299,15 @@ void BodyGroup::evaluate_contact() {
   for (std::size_t k = 0; k < bodies_.size(); ++k) bodies_[k].set_contact_loads(force_[k], row_[k]);
 }
 
-namespace {
-std::vector<double> flat(const std::vector<Vec3>& v) {
-  std::vector<double> out(3 * v.size());
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (int c = 0; c < 3; ++c) out[3 * i + static_cast<std::size_t>(c)] = v[i][c];
-  return out;
-}
-std::vector<Vec3> unflat(const std::vector<double>& d) {
-  std::vector<Vec3> out(d.size() / 3);
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Vec3(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
-  return out;
-}
-}  // namespace
 
 void BodyGroup::export_state(StateArchive& a, const std::string& prefix) const {
   for (const ShellModel& b : bodies_) {
     const std::string bp = prefix + b.name() + "/";
-    a.put(bp + "x_mm", flat(b.positions_mm()));
-    a.put(bp + "v_mm_per_ms", flat(b.velocities_mm_per_ms()));
+    a.put_vectors(bp + "x_mm", b.positions_mm());
+    a.put_vectors(bp + "v_mm_per_ms", b.velocities_mm_per_ms());
     a.put_scalar(bp + "time_ms", b.time_ms());
   }
-  for (std::size_t k = 0; k < x_build_.size(); ++k) a.put(prefix + bodies_[k].name() + "/x_build_mm", flat(x_build_[k]));
+  for (std::size_t k = 0; k < x_build_.size(); ++k) a.put_vectors(prefix + bodies_[k].name() + "/x_build_mm", x_build_[k]);
   for (std::size_t p = 0; p < pairs_.size(); ++p)
     a.put(prefix + "pair_" + std::to_string(p) + "/side", std::vector<double>(pairs_[p].side.begin(), pairs_[p].side.end()));
   a.put_scalar(prefix + "candidate_builds", static_cast<double>(stats_.candidate_builds));
@@ -329,13 +316,13 @@ void BodyGroup::export_state(StateArchive& a, const std::string& prefix) const {
 void BodyGroup::import_state(const StateArchive& a, const std::string& prefix) {
   for (ShellModel& b : bodies_) {
     const std::string bp = prefix + b.name() + "/";
-    const long n3 = static_cast<long>(3 * b.node_count());
-    b.set_state(unflat(a.get(bp + "x_mm", n3)), unflat(a.get(bp + "v_mm_per_ms", n3)));
+    const long n = static_cast<long>(b.node_count());
+    b.set_state(a.get_vectors<Vec3>(bp + "x_mm", n), a.get_vectors<Vec3>(bp + "v_mm_per_ms", n));
     b.set_time_ms(a.scalar(bp + "time_ms"));
   }
   if (!pairs_.empty()) {
     for (std::size_t k = 0; k < x_build_.size(); ++k)
-      x_build_[k] = unflat(a.get(prefix + bodies_[k].name() + "/x_build_mm", static_cast<long>(3 * bodies_[k].node_count())));
+      x_build_[k] = a.get_vectors<Vec3>(prefix + bodies_[k].name() + "/x_build_mm", static_cast<long>(bodies_[k].node_count()));
     std::vector<TriangleHash> hash;
     for (std::size_t k = 0; k < bodies_.size(); ++k)
       hash.push_back(hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
