@@ -412,6 +412,13 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(structure.fung_compression_fraction, "", 0.008, 0, 1,
                            "Law 'fung_tension': in compression the stress is c alpha eps plus this fraction of the "
                            "capped Fung law's stiffening (ours; 0: linear, 1: the capped Fung law both ways)."));
+  t.push_back(SYSTOLE_REAL(structure.area_floor, "", 0, 0, 0.95,
+                           "Area floor of every shell triangle (ours; 0: off, the seed's springs only): below this "
+                           "ratio J of its stress-free area a triangle resists with the energy kappa s A0 (J0 - J)^2 / J, "
+                           "which grows without bound as J -> 0, so the triangle cannot be squeezed flat in its plane "
+                           "(the springs resist only length changes; docs/fsei.md, session 13)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(structure.area_floor_modulus_kpa, "kPa", 10, 0, 1e4,
+                                    "Modulus kappa of structure.area_floor (ours)."));
   t.push_back(SYSTOLE_CHOICE(structure.body, "sphere",
                              (std::vector<std::string_view>{"sphere", "sheet", "left_heart", "lv", "mitral_leaflets"}),
                              "Scene 'mechanics': the body - a closed spherical shell, a square sheet clamped on its "

@@ -164,6 +164,8 @@ struct Structure {
   double mitral_limit_mm;
   double fung_exponent_cap;             // law "fung_tension": largest a eps^2 (ours)
   double fung_compression_fraction;     // law "fung_tension": Fung stiffening kept in compression (ours)
+  double area_floor;                    // ShellOptions::area_floor (ours; 0: off)
+  double area_floor_modulus_kpa;        // ShellOptions::area_floor_modulus_kpa (ours)
 };
 
 // Scene "ibm": immersed-boundary verification flows (solver/scene/ibm_scene.h), nondimensional

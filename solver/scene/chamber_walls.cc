@@ -23,6 +23,8 @@ structure::ShellOptions structure_options(const config::Scenario& s, double plan
   o.damping_per_ms = s.structure.damping_per_ms;
   o.time_step_safety = s.structure.time_step_safety;
   o.strain_limit = s.structure.strain_limit;
+  o.area_floor = s.structure.area_floor;
+  o.area_floor_modulus_kpa = s.structure.area_floor_modulus_kpa;
   o.cavity_plane_z_mm = plane_z_mm;
   return o;
 }

@@ -1,4 +1,5 @@
 #include "solver/scene/mechanics_scene.h"
+#include "solver/scene/chamber_walls.h"
 #include "solver/scene/h5_dataset.h"
 
 #include <hdf5.h>
@@ -40,16 +41,9 @@ struct Bodies {
 
 Bodies build_bodies(const config::Scenario& s) {
   const config::Structure& st = s.structure;
-  structure::ShellOptions opt;
-  opt.law = st.law;
-  opt.fung_exponent_cap = st.fung_exponent_cap;
-  opt.fung_compression_fraction = st.fung_compression_fraction;
+  structure::ShellOptions opt = structure_options(s, 0.0);
   opt.active_min_fibre_stretch = s.tissue.active_min_fibre_stretch;
   opt.active_cross_fibre_fraction = s.tissue.active_cross_fibre_fraction;
-  opt.bending = st.bending;
-  opt.damping_per_ms = st.damping_per_ms;
-  opt.time_step_safety = st.time_step_safety;
-  opt.strain_limit = st.strain_limit;
   const structure::ShellMaterials mat = structure::materials_from_config(s.tissue);
   std::vector<ShellModel> models;
   if (st.body == "sphere") {

@@ -163,6 +163,11 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
     throw InputError(body + ": threads = " + std::to_string(options.threads) + " must be in [1, 256]");
   if (options.restep_interval < 1)
     throw InputError(body + ": restep_interval = " + std::to_string(options.restep_interval) + " must be >= 1");
+  if (!(options.area_floor >= 0 && options.area_floor < 1))
+    throw InputError(body + ": structure.area_floor = " + fmt(options.area_floor) + " must be in [0, 1)");
+  if (!(options.area_floor_modulus_kpa > 0 && std::isfinite(options.area_floor_modulus_kpa)))
+    throw InputError(body + ": structure.area_floor_modulus_kpa = " + fmt(options.area_floor_modulus_kpa) +
+                     " kPa must be > 0");
   if (!(materials.density_mg_per_mm3 > 0))
     throw InputError(body + ": density = " + fmt(materials.density_mg_per_mm3) + " mg/mm^3 must be > 0");
   if (!(materials.poisson_ratio >= 0 && materials.poisson_ratio < 1))
@@ -281,6 +286,11 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
     active_.push_back({tr[0], tr[1], tr[2], w0, w1, v0, v1, mesh_.thickness_mm[t] * area[t]});
   }
   active_tension_kpa_.assign(nn, 0.0);
+  if (options.area_floor > 0) {
+    floor_area_mm2_ = area;
+    floor_kappa_s_.resize(nt);
+    for (std::size_t t = 0; t < nt; ++t) floor_kappa_s_[t] = options.area_floor_modulus_kpa * mesh_.thickness_mm[t];
+  }
 
   // --- state ---
   fixed_.assign(nn, 0);
@@ -402,6 +412,49 @@ double ShellModel::bending_energy(const std::vector<Vec3>& x) const {
   double w = 0;
   for (const BendingHinge& h : hinges_)
     w += h.kb_uj * (1 - std::cos(hinge_angle(x[h.e0], x[h.e1], x[h.o1], x[h.o2]) - h.theta0));
+  return w;
+}
+
+// The area floor (ours; header): W = kappa s A0 (J0 - J)^2 / J below J0, dW/dJ = -kappa s A0
+// (J0^2/J^2 - 1), so the force is pi dA/dx with pi = kappa s (J0^2/J^2 - 1) (mN/mm) and
+// dA/dx_a = n x (x_c - x_b) / 2 (cyclic). Gershgorin rows (row != nullptr): the J-curvature
+// term kappa s 2 J0^2 / (J^3 A0) |g_a| sum_b |g_b| plus |pi| times a bound on the area's
+// Hessian blocks, 3 (l_max^2 / (4 A) + 1/2) (an out-of-plane motion of a node changes A at
+// second order as l^2 / (4 A); ours, approximate as the hinges' bound).
+void ShellModel::add_area_floor_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f, double* row) const {
+  if (floor_area_mm2_.empty()) return;
+  const double j0 = options_.area_floor;
+  for (std::size_t t = 0; t < mesh_.tri.size(); ++t) {
+    const auto& tr = mesh_.tri[t];
+    const Vec3 &xa = x[tr[0]], &xb = x[tr[1]], &xc = x[tr[2]];
+    const Vec3 n2 = (xb - xa).cross(xc - xa);
+    const double twice_area = n2.norm();
+    const double a0 = floor_area_mm2_[t], j = 0.5 * twice_area / a0;
+    if (j >= j0 || !(twice_area > 0)) continue;
+    const Vec3 n = n2 / twice_area;
+    const Vec3 g[3] = {0.5 * n.cross(xc - xb), 0.5 * n.cross(xa - xc), 0.5 * n.cross(xb - xa)};
+    const double ks = floor_kappa_s_[t];
+    const double pi = ks * (j0 * j0 / (j * j) - 1);
+    for (int k = 0; k < 3; ++k) f[tr[k]] += pi * g[k];
+    if (row == nullptr) continue;
+    const double gn[3] = {g[0].norm(), g[1].norm(), g[2].norm()};
+    const double lmax2 = std::max({(xb - xa).squaredNorm(), (xc - xb).squaredNorm(), (xa - xc).squaredNorm()});
+    const double curv = ks * 2 * j0 * j0 / (j * j * j * a0) * (gn[0] + gn[1] + gn[2]);
+    const double geo = pi * 3 * (lmax2 / (2 * twice_area) + 0.5);
+    for (int k = 0; k < 3; ++k) row[tr[k]] += curv * gn[k] + geo;
+  }
+}
+
+double ShellModel::area_floor_energy(const std::vector<Vec3>& x) const {
+  if (floor_area_mm2_.empty()) return 0;
+  const double j0 = options_.area_floor;
+  double w = 0;
+  for (std::size_t t = 0; t < mesh_.tri.size(); ++t) {
+    const auto& tr = mesh_.tri[t];
+    const double a0 = floor_area_mm2_[t];
+    const double j = 0.5 * (x[tr[1]] - x[tr[0]]).cross(x[tr[2]] - x[tr[0]]).norm() / a0;
+    if (j < j0) w += floor_kappa_s_[t] * a0 * (j0 - j) * (j0 - j) / j;
+  }
   return w;
 }
 
@@ -593,6 +646,7 @@ void ShellModel::compute_forces() {
       }
     }
   }
+  add_area_floor_forces(x_, force_, row);
   add_pressure_forces(x_, force_);
   if (!contact_force_.empty())
     for (std::size_t i = 0; i < nn; ++i) {
@@ -743,7 +797,7 @@ void ShellModel::check_energy_growth(EnergyWatch& watch, double dt, double dt_st
   const double ke = kinetic_energy_uj();
   const bool grew = watch.kinetic_uj > 0 && ke > 1e3 * watch.kinetic_uj;
   if (grew && watch.grew) {
-    const double pot = spring_energy(x_) + bending_energy(x_);
+    const double pot = spring_energy(x_) + area_floor_energy(x_) + bending_energy(x_);
     if (ke > pot) {
       std::size_t worst = 0;
       for (std::size_t i = 1; i < node_count(); ++i)
@@ -814,7 +868,7 @@ AdvanceStats ShellModel::advance(double T_ms) {
 Energies ShellModel::energies() const {
   Energies e;
   for (std::size_t i = 0; i < node_count(); ++i) e.kinetic_uj += 0.5 * mass_[i] * v_[i].squaredNorm();
-  e.elastic_uj = spring_energy(x_);
+  e.elastic_uj = spring_energy(x_) + area_floor_energy(x_);
   e.bending_uj = bending_energy(x_);
   e.active_uj = active_energy(x_);
   double lp = 0;

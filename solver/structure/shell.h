@@ -22,6 +22,11 @@
 //     literal eq 24 (a force along e_f at every node, which pushes a whole body); optionally
 //     scaled by a length-tension factor f(lambda_f) (ShellOptions::active_min_fibre_stretch, ours),
 //     and with a cross-fibre fraction k: + k tau s A g(lambda_c) (active_cross_fibre_fraction, ours);
+//   - an in-plane area floor (ours, options.area_floor J0 > 0; off in the seed): on every triangle
+//     whose area ratio J = A/A0 is below J0, W = kappa s A0 (J0 - J)^2 / J, kappa =
+//     options.area_floor_modulus_kpa; its force kappa s (J0^2/J^2 - 1) dA/dx pushes the area up
+//     and grows without bound as J -> 0, so a triangle cannot be squeezed flat in its plane (the
+//     springs resist only length changes); W and its slope vanish at J0 (reported in elastic_uj);
 //   - cavity pressure p (kPa, follower load): -p A_T n_T / 3 on each node of triangle T
 //     (normals into the cavity, so p > 0 inflates), = p dV/dx for a closed surface;
 //   - external nodal loads (mN) from the caller, held constant during advance().
@@ -75,13 +80,16 @@ struct ShellOptions {
   double cavity_plane_z_mm = 0;    // plane closing an open chamber for cavity_volume_mm3()
   double min_step_ms = 1e-4;       // a stable step below this (0.1 us, < the seed's 0.4 us) stops
                                    // the run with a diagnosis instead of crawling (ours)
+  double area_floor = 0;              // J0 of the area floor (ours; 0: off, the seed's springs only);
+                                      // in [0, 1)
+  double area_floor_modulus_kpa = 10;  // kappa of the area floor (ours), > 0
   bool flat_rest_angles = false;   // theta0 = 0 on every hinge instead of the stress-free mesh's
                                    // (a shell that is flat at rest; verification, ours)
 };
 
 struct Energies {
   double kinetic_uj = 0;
-  double elastic_uj = 0;         // in-plane springs
+  double elastic_uj = 0;         // in-plane springs and the area floor
   double bending_uj = 0;
   double active_uj = 0;          // sum tau_act s A lambda_f (the active tension's potential)
   double load_potential_uj = 0;  // -p V - sum F_ext . x
@@ -228,6 +236,10 @@ class ShellModel {
   double spring_energy(const std::vector<Vec3>& x) const;
   double bending_energy(const std::vector<Vec3>& x) const;
   double active_energy(const std::vector<Vec3>& x) const;
+  double area_floor_energy(const std::vector<Vec3>& x) const;
+  // Adds the area floor's forces; with row != nullptr also its Gershgorin row sums (see
+  // compute_forces).
+  void add_area_floor_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f, double* row = nullptr) const;
   void add_spring_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f) const;
   void add_bending_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f) const;
   void add_active_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f) const;
@@ -256,6 +268,7 @@ class ShellModel {
   std::vector<BendingHinge> hinges_;
   std::vector<ActiveTriangle> active_;
   std::vector<double> active_tension_kpa_;  // per node
+  std::vector<double> floor_area_mm2_, floor_kappa_s_;  // area floor: A0 and kappa s per triangle (empty: off)
   bool active_on_ = false;
   std::vector<std::uint8_t> fixed_;
   std::vector<Vec3> x_, v_, force_, external_;

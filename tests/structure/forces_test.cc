@@ -132,6 +132,29 @@ TEST(StructureForces, ActiveTensionIsMinusTheEnergyGradient) {
   }
 }
 
+// The area floor (ours): on meshes shrunk to 0.7 of their size and perturbed (area ratios about
+// 0.2 to 0.8, J0 = 0.9: nearly every triangle inside the floor) its force is minus the gradient
+// of its energy and carries no net force or torque; off (J0 = 0) it adds nothing.
+TEST(StructureForces, AreaFloorIsMinusTheEnergyGradient) {
+  for (const auto& mesh : test_meshes()) {
+    ShellOptions opt;
+    opt.area_floor = 0.9;
+    const ShellModel body(mesh, seed_materials(), opt), off(mesh, seed_materials(), ShellOptions{});
+    auto x = perturbed(mesh.position_mm, 0.3, 23);
+    for (auto& p : x) p *= std::sqrt(0.5);
+    const double mismatch = gradient_mismatch(
+        x, [&](const auto& y) { return body.area_floor_energy(y); },
+        [&](const auto& y, auto& f) { body.add_area_floor_forces(y, f); }, 1e-6);
+    EXPECT_LT(mismatch, 1e-6) << mesh.name;
+    std::vector<Vec3> f(x.size(), Vec3::Zero());
+    body.add_area_floor_forces(x, f);
+    expect_no_net_force_or_torque(x, f, "area floor");
+    EXPECT_GT(body.area_floor_energy(x), 0);
+    EXPECT_EQ(body.area_floor_energy(mesh.position_mm), 0);  // J = 1 > J0
+    EXPECT_EQ(off.area_floor_energy(x), 0);
+  }
+}
+
 TEST(StructureForces, TotalForceIsMinusTheTotalEnergyGradientWithPressure) {
   // A closed sphere: pressure work -p V is a potential too.
   const auto mesh = icosphere(10, 2, 1.5, Tissue::kLvMyocardium, true);
@@ -271,6 +294,48 @@ TEST(StructureDiagnoses, TheStepLimiterNamesATriangleSqueezedFlat) {
   std::printf("  [measured] stable step %.3g -> %.3g ms: %s\n", step_before, body.stable_step_ms(), what.c_str());
   EXPECT_LT(body.stable_step_ms(), 0.5 * step_before);
   EXPECT_NE(what.find("squeezed flat to 0.05"), std::string::npos) << what;
+}
+
+// A flat, low isosceles triangle (base 2 mm, apex 0.3 mm above it, base nodes held) with its
+// apex pushed towards the base by a constant in-plane load F (ours): the springs barely resist
+// (the legs shorten by 4 % when it is flat), so without the area floor the apex passes through the
+// base; with the floor it comes to rest where the floor's force balances F, J0^2/J^2 - 1 =
+// F / (kappa s |bc| / 2) (the springs' share at that strain is < 1e-3 of F), and stays above it.
+TEST(StructureAreaFloor, StopsATriangleFromBeingSqueezedFlat) {
+  geometry::TriMesh mesh;
+  mesh.name = "triangle";
+  const double h = 0.3, s = 1.0;
+  mesh.add_node({0, h, 0});
+  mesh.add_node({-1, 0, 0}, geometry::kAnchor);
+  mesh.add_node({1, 0, 0}, geometry::kAnchor);
+  mesh.add_triangle(0, 1, 2, Tissue::kLvMyocardium, s, {1, 0, 0});
+  const double load_mn = 20;
+  auto run = [&](double floor) {
+    ShellOptions opt;
+    opt.area_floor = floor;
+    opt.damping_per_ms = 20;
+    ShellModel body(mesh, seed_materials(), opt);
+    std::vector<Vec3> load(3, Vec3::Zero());
+    load[0] = {0, -load_mn, 0};
+    body.set_external_loads(load);
+    double lowest = 1;
+    for (int k = 0; k < 400; ++k) {
+      body.advance(0.01);
+      lowest = std::min(lowest, body.positions_mm()[0].y() / h);
+      if (lowest < -0.5) break;  // passed through (further on, the legs would reach the strain limit)
+    }
+    return std::pair{lowest, body.positions_mm()[0].y() / h};
+  };
+  const auto [lowest_off, final_off] = run(0);
+  EXPECT_LT(lowest_off, -0.5) << "without the floor the apex passes through the base";
+  ShellOptions defaults;
+  const double j0 = 0.5;
+  const double j_eq = j0 / std::sqrt(1 + load_mn / (defaults.area_floor_modulus_kpa * s * 1.0));
+  const auto [lowest_on, final_on] = run(j0);
+  std::printf("  [measured] without the floor: lowest J %.3f, final %.3f; with J0 = %.1f: lowest %.4f, final %.4f "
+              "(balance %.4f)\n", lowest_off, final_off, j0, lowest_on, final_on, j_eq);
+  EXPECT_GT(lowest_on, 0.5 * j_eq);
+  EXPECT_NEAR(final_on, j_eq, 0.01 * j_eq);
 }
 
 TEST(StructureThreads, TwoThreadsGiveTheSameForcesAndStableStep) {
