@@ -21,6 +21,11 @@ struct RunResult {
   std::vector<std::map<std::string, double>> beats;
   // Time series, series[0] is "time_s".
   std::vector<Series> series;
+  // Phase averages over the whole beats after the first (the seed's statistics; scenes fsi/fsei,
+  // solver/diagnostics/phase_average.h): [0] is "phase" (t/T at the bins' centres), then for
+  // every series X but time_s, X (the mean over the beats) and X_rms (the root mean square of the
+  // beats' deviation from it). Empty with fewer than two whole beats.
+  std::vector<Series> phase_averaged;
   // Free-form facts worth recording (e.g. "periodic state reached at beat 12").
   std::vector<std::string> notes;
 };

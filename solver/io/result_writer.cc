@@ -169,6 +169,10 @@ void write_result_h5(const fs::path& file, const RunResult& result, const Proven
           write_vector(group, name, values, unit_from_name(name));
         }
     }
+    if (!result.phase_averaged.empty()) {
+      H5Handle group(create_ordered_group(h5, "phase_averaged"), H5Gclose, "create /phase_averaged");
+      for (const Series& s : result.phase_averaged) write_vector(group, s.name, s.values, s.unit);
+    }
     {
       H5Handle group(create_ordered_group(h5, "metrics"), H5Gclose, "create /metrics");
       for (const auto& [name, value] : result.metrics) write_double_attribute(group, name, value);
@@ -189,6 +193,13 @@ H5Contents read_result_h5(const fs::path& file) {
     for (const auto& name : member_names(group)) {
       H5Handle set(H5Dopen2(group, name.c_str(), H5P_DEFAULT), H5Dclose, "open " + name);
       out.series.push_back({name, read_string_attribute(set, "unit"), read_vector(group, name)});
+    }
+  }
+  if (H5Lexists(h5, "phase_averaged", H5P_DEFAULT) > 0) {
+    H5Handle group(H5Gopen2(h5, "phase_averaged", H5P_DEFAULT), H5Gclose, "open /phase_averaged");
+    for (const auto& name : member_names(group)) {
+      H5Handle set(H5Dopen2(group, name.c_str(), H5P_DEFAULT), H5Dclose, "open " + name);
+      out.phase_averaged.push_back({name, read_string_attribute(set, "unit"), read_vector(group, name)});
     }
   }
   {
@@ -252,11 +263,12 @@ void write_pv_loop_csv(const fs::path& file, const RunResult& result) {
   });
 }
 
-void write_time_series_csv(const fs::path& file, const RunResult& result) {
-  if (result.series.empty()) throw std::logic_error("write_time_series_csv: the result has no series");
-  const size_t rows = result.series.front().values.size();
+namespace {
+// The series of equal length to the first as the columns of a CSV file (header = their names).
+void write_columns_csv(const fs::path& file, const std::vector<Series>& series) {
+  const size_t rows = series.front().values.size();
   std::vector<const Series*> columns;
-  for (const Series& s : result.series)
+  for (const Series& s : series)
     if (s.values.size() == rows) columns.push_back(&s);
   atomic_write(file, [&](const fs::path& tmp) {
     std::ofstream out(tmp);
@@ -269,6 +281,12 @@ void write_time_series_csv(const fs::path& file, const RunResult& result) {
     if (!out) throw std::runtime_error("cannot write " + tmp.string());
   });
 }
+}  // namespace
+
+void write_time_series_csv(const fs::path& file, const RunResult& result) {
+  if (result.series.empty()) throw std::logic_error("write_time_series_csv: the result has no series");
+  write_columns_csv(file, result.series);
+}
 
 std::vector<fs::path> write_results(const fs::path& dir, const RunResult& result,
                                     const Provenance& provenance) {
@@ -279,6 +297,10 @@ std::vector<fs::path> write_results(const fs::path& dir, const RunResult& result
   if (!result.series.empty()) {
     files.push_back(dir / "time_series.csv");
     write_time_series_csv(files.back(), result);
+  }
+  if (!result.phase_averaged.empty()) {
+    files.push_back(dir / "phase_averaged.csv");
+    write_columns_csv(files.back(), result.phase_averaged);
   }
   if (has_pv_loop(result)) {
     files.push_back(dir / "pv_loop.csv");

@@ -16,7 +16,7 @@ struct Provenance {
 };
 
 // Writes result.h5 and metrics.json into `dir` (created if missing), time_series.csv when the
-// result has time series, pv_loop.csv when it has the LV pressure and volume series, and
+// result has time series, phase_averaged.csv when it has phase averages, pv_loop.csv when it has the LV pressure and volume series, and
 // returns the paths written. Each file is written to a temporary name and renamed, so a reader never sees
 // a half-written file. Throws std::runtime_error on I/O failure.
 std::vector<std::filesystem::path> write_results(const std::filesystem::path& dir,
@@ -37,6 +37,7 @@ void write_time_series_csv(const std::filesystem::path& file, const RunResult& r
 // Reads back what write_result_h5 wrote (tests, tools).
 struct H5Contents {
   std::vector<Series> series;
+  std::vector<Series> phase_averaged;  // empty when the file has none
   std::map<std::string, std::vector<double>> beats;
   std::map<std::string, double> metrics;
   std::string scenario_json, version, git_revision;

@@ -21,6 +21,7 @@
 #include "solver/coupling/fluid_module.h"
 #include "solver/coupling/scheduler.h"
 #include "solver/diagnostics/beat_metrics.h"
+#include "solver/diagnostics/phase_average.h"
 #include "solver/diagnostics/kinematics.h"
 #include "solver/electro/tissue.h"
 #include "solver/geometry/left_heart.h"
@@ -1138,6 +1139,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       for (const auto& [key, value] : beats.back())
         if (!M.count(key)) M[key] = value;
     if (s.outputs.metrics) result.beats = std::move(beats);
+    // Phase averages over the whole beats after the first (the seed's statistics), in bins of
+    // 0.01 T (ours) or one sample interval when the sampling is coarser.
+    const int bins = std::min(100, static_cast<int>(std::floor(period_ms / dt_sample)));
+    if (M["beats_completed"] >= 2 && bins >= 1)
+      result.phase_averaged = diagnostics::phase_averaged_series(result.series, 1e-3 * period_ms, bins, 1);
   }
   result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +
                          std::to_string(pts.ny) + "x" + std::to_string(pts.nz) + " points), " +

@@ -81,6 +81,35 @@ TEST(ResultWriter, H5RoundTripWithUnitsAndProvenance) {
   std::filesystem::remove_all(dir);
 }
 
+// Phase averages (scenes fsi/fsei with two or more beats) go to /phase_averaged and
+// phase_averaged.csv; a result without them has neither (the group is optional on reading).
+TEST(ResultWriter, PhaseAveragesRoundTripAndAreOptional) {
+  const auto dir = std::filesystem::temp_directory_path() / ("systole-io-" + std::to_string(std::random_device{}()));
+  RunResult r = sample_result();
+  r.phase_averaged = {{"phase", "", {0.25, 0.75}},
+                      {"lv_pressure_mmhg", "mmHg", {80, 5}},
+                      {"lv_pressure_mmhg_rms", "mmHg", {2, 0.5}}};
+  const auto files = write_results(dir, r, {"{}", ""});
+  EXPECT_EQ(files.size(), 5u);
+  const H5Contents c = read_result_h5(dir / "result.h5");
+  ASSERT_EQ(c.phase_averaged.size(), 3u);
+  EXPECT_EQ(c.phase_averaged[1].name, "lv_pressure_mmhg");
+  EXPECT_EQ(c.phase_averaged[1].unit, "mmHg");
+  EXPECT_EQ(c.phase_averaged[2].values, (std::vector<double>{2, 0.5}));
+  std::ifstream csv(dir / "phase_averaged.csv");
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  EXPECT_EQ(header, "phase,lv_pressure_mmhg,lv_pressure_mmhg_rms");
+  EXPECT_EQ(first, "0.25,80,2");
+  r.phase_averaged.clear();
+  std::filesystem::remove_all(dir);
+  EXPECT_EQ(write_results(dir, r, {"{}", ""}).size(), 4u);
+  EXPECT_TRUE(read_result_h5(dir / "result.h5").phase_averaged.empty());
+  EXPECT_FALSE(std::filesystem::exists(dir / "phase_averaged.csv"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(ResultWriter, NoPvLoopFileWithoutLvSeriesAndNoSeriesFileWithoutSeries) {
   const auto dir = std::filesystem::temp_directory_path() / ("systole-io-" + std::to_string(std::random_device{}()));
   RunResult r;
