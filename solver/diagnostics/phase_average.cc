@@ -1,5 +1,6 @@
 #include "solver/diagnostics/phase_average.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -56,6 +57,89 @@ PhaseAverage phase_average(const std::vector<double>& time_s, const std::vector<
     }
   for (double& r : out.rms) r = std::sqrt(r);
   return out;
+}
+
+FieldPhaseAverage::FieldPhaseAverage(std::size_t size, double period_s, int bins, int discard)
+    : size_(size), period_s_(period_s), bins_(bins), discard_(discard) {
+  if (!(period_s > 0)) throw std::invalid_argument("FieldPhaseAverage: period " + std::to_string(period_s) + " s must be > 0");
+  if (bins < 1) throw std::invalid_argument("FieldPhaseAverage: bins = " + std::to_string(bins) + " must be >= 1");
+  const std::size_t n = static_cast<std::size_t>(bins) * size;
+  sum_.assign(n, 0.0);
+  s1_.assign(n, 0.0);
+  s2_.assign(n, 0.0);
+  count_.assign(static_cast<std::size_t>(bins), 0.0);
+  folded_.assign(static_cast<std::size_t>(bins), 0);
+}
+
+void FieldPhaseAverage::fold() {
+  if (beat_ >= discard_)
+    for (std::size_t j = 0; j < count_.size(); ++j) {
+      if (count_[j] == 0) continue;
+      for (std::size_t i = 0; i < size_; ++i) {
+        const double m = sum_[j * size_ + i] / count_[j];
+        s1_[j * size_ + i] += m;
+        s2_[j * size_ + i] += m * m;
+      }
+      ++folded_[j];
+    }
+  std::fill(sum_.begin(), sum_.end(), 0.0);
+  std::fill(count_.begin(), count_.end(), 0.0);
+}
+
+void FieldPhaseAverage::add(double t_s, const std::vector<double>& values) {
+  if (values.size() != size_)
+    throw std::invalid_argument("FieldPhaseAverage: " + std::to_string(values.size()) + " values, expected " +
+                                std::to_string(size_));
+  const double tol = 1e-9;
+  const double beats_in = t_s / period_s_;
+  const long k = static_cast<long>(std::floor(beats_in + tol / period_s_));
+  if (k != beat_) {
+    if (beat_ >= 0) fold();
+    beat_ = k;
+  }
+  const double phase = std::max(0.0, beats_in - static_cast<double>(k));
+  const auto j = std::min(static_cast<std::size_t>(bins_ - 1), static_cast<std::size_t>(std::floor(phase * bins_ + 1e-9)));
+  for (std::size_t i = 0; i < size_; ++i) sum_[j * size_ + i] += values[i];
+  count_[j] += 1;
+}
+
+std::vector<double> FieldPhaseAverage::mean(int j) const {
+  const auto b = static_cast<std::size_t>(j);
+  std::vector<double> m(size_, 0.0);
+  if (folded_.at(b) > 0)
+    for (std::size_t i = 0; i < size_; ++i) m[i] = s1_[b * size_ + i] / folded_[b];
+  return m;
+}
+
+std::vector<double> FieldPhaseAverage::rms(int j) const {
+  const auto b = static_cast<std::size_t>(j);
+  std::vector<double> r(size_, 0.0);
+  if (folded_.at(b) > 0)
+    for (std::size_t i = 0; i < size_; ++i) {
+      const double m = s1_[b * size_ + i] / folded_[b];
+      r[i] = std::sqrt(std::max(0.0, s2_[b * size_ + i] / folded_[b] - m * m));
+    }
+  return r;
+}
+
+void FieldPhaseAverage::export_state(StateArchive& archive, const std::string& prefix) const {
+  archive.put_scalar(prefix + "beat", static_cast<double>(beat_));
+  archive.put(prefix + "sum", sum_);
+  archive.put(prefix + "count", count_);
+  archive.put(prefix + "s1", s1_);
+  archive.put(prefix + "s2", s2_);
+  archive.put(prefix + "folded", std::vector<double>(folded_.begin(), folded_.end()));
+}
+
+void FieldPhaseAverage::import_state(const StateArchive& archive, const std::string& prefix) {
+  const auto n = static_cast<long>(sum_.size()), nb = static_cast<long>(bins_);
+  beat_ = static_cast<long>(archive.scalar(prefix + "beat"));
+  sum_ = archive.get(prefix + "sum", n);
+  count_ = archive.get(prefix + "count", nb);
+  s1_ = archive.get(prefix + "s1", n);
+  s2_ = archive.get(prefix + "s2", n);
+  const std::vector<double>& f = archive.get(prefix + "folded", nb);
+  for (std::size_t j = 0; j < folded_.size(); ++j) folded_[j] = static_cast<int>(f[j]);
 }
 
 std::vector<Series> phase_averaged_series(const std::vector<Series>& series, double period_s, int bins, int discard) {

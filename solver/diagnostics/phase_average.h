@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "solver/core/run_result.h"
+#include "solver/core/state_archive.h"
 
 namespace systole::diagnostics {
 
@@ -33,5 +34,38 @@ PhaseAverage phase_average(const std::vector<double>& time_s, const std::vector<
 // RunResult::phase_averaged of a result's series (series[0] must be "time_s"): "phase", then X
 // and X_rms for every other series X. Empty when fewer than one beat is left after `discard`.
 std::vector<Series> phase_averaged_series(const std::vector<Series>& series, double period_s, int bins, int discard);
+
+// The same statistics for a field sampled during a run (e.g. the wall shear stress at every shell
+// node), accumulated as the samples come so that no beat is kept: per bin, the sums over the
+// finished beats of each beat's bin mean and of its square. A beat is finished when a sample of a
+// later beat arrives (the scenes sample at every beat's start). A bin averages over the finished
+// beats after `discard` that had a sample in it. The accumulators are state: export_state /
+// import_state put them in a checkpoint so a resumed run gives the straight run's averages.
+class FieldPhaseAverage {
+ public:
+  // size values per sample; throws std::invalid_argument for period <= 0 or bins < 1.
+  FieldPhaseAverage(std::size_t size, double period_s, int bins, int discard);
+  // One sample at t_s (>= the previous sample's time); values.size() == size (else
+  // std::invalid_argument).
+  void add(double t_s, const std::vector<double>& values);
+  int bins() const { return bins_; }
+  // Beats folded into bin j so far, and that bin's mean and rms (size values each; zeros when
+  // no beat was folded).
+  int beats(int j) const { return folded_[static_cast<std::size_t>(j)]; }
+  std::vector<double> mean(int j) const;
+  std::vector<double> rms(int j) const;
+  void export_state(StateArchive& archive, const std::string& prefix) const;
+  void import_state(const StateArchive& archive, const std::string& prefix);
+
+ private:
+  void fold();  // the current beat's bin means into the sums (when it is after `discard`)
+  std::size_t size_;
+  double period_s_;
+  int bins_, discard_;
+  long beat_ = -1;                      // the beat the current sums belong to
+  std::vector<double> sum_, count_;     // current beat: per bin x value, per bin
+  std::vector<double> s1_, s2_;         // finished beats: per bin x value
+  std::vector<int> folded_;             // finished beats per bin
+};
 
 }  // namespace systole::diagnostics

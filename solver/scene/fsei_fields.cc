@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "solver/diagnostics/phase_average.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/scene/h5_dataset.h"
 
@@ -256,6 +257,75 @@ void FseiFieldWriter::write_xmf() const {
     x << "  </Grid>\n </Domain>\n</Xdmf>\n";
   }
   std::filesystem::rename(tmp, xmf);
+}
+
+void write_wss_phase_average(const std::filesystem::path& dir, const structure::BodyGroup& group,
+                             const std::vector<std::string>& names, const diagnostics::FieldPhaseAverage& wss) {
+  const char* owner = "fsei wss phase average";
+  const std::string h5name = "fsei_wss_phase.h5";
+  const std::string path = (dir / h5name).string();
+  const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (file < 0) throw std::runtime_error(std::string(owner) + ": cannot create " + path);
+  const int bins = wss.bins();
+  std::vector<double> phase(static_cast<std::size_t>(bins)), beats(static_cast<std::size_t>(bins));
+  for (int j = 0; j < bins; ++j) {
+    phase[static_cast<std::size_t>(j)] = (j + 0.5) / bins;
+    beats[static_cast<std::size_t>(j)] = wss.beats(j);
+  }
+  write_h5_dataset(file, "phase", H5T_NATIVE_DOUBLE, phase.data(), static_cast<hsize_t>(bins), 1, owner);
+  write_h5_dataset(file, "beats", H5T_NATIVE_DOUBLE, beats.data(), static_cast<hsize_t>(bins), 1, owner);
+  std::vector<std::vector<double>> mean, rms;
+  for (int j = 0; j < bins; ++j) {
+    mean.push_back(wss.mean(j));
+    rms.push_back(wss.rms(j));
+  }
+  std::size_t offset = 0;
+  for (std::size_t b = 0; b < group.body_count(); ++b) {
+    const geometry::TriMesh& m = group.body(b).stress_free_mesh();
+    const std::string& n = names.at(b);
+    H5Gclose(H5Gcreate2(file, n.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    std::vector<std::int32_t> tri;
+    for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
+    write_h5_dataset(file, n + "/triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3, owner);
+    const std::vector<double> x = flat(m.position_mm);
+    write_h5_dataset(file, n + "/positions_mm", H5T_NATIVE_DOUBLE, x.data(), m.node_count(), 3, owner);
+    for (int j = 0; j < bins; ++j) {
+      const std::string g = n + "/bin_" + std::to_string(j);
+      H5Gclose(H5Gcreate2(file, g.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+      const auto jj = static_cast<std::size_t>(j);
+      write_h5_dataset(file, g + "/wss_mean_pa", H5T_NATIVE_DOUBLE, mean[jj].data() + offset, m.node_count(), 1, owner);
+      write_h5_dataset(file, g + "/wss_rms_pa", H5T_NATIVE_DOUBLE, rms[jj].data() + offset, m.node_count(), 1, owner);
+    }
+    offset += m.node_count();
+  }
+  H5Fclose(file);
+  // ParaView: a temporal collection over the phase bins (time = t/T), every body in each.
+  std::ofstream x(dir / "fsei_wss_phase.xmf");
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\"><Domain>\n"
+    << "<Grid Name=\"wss_phase_average\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (int j = 0; j < bins; ++j) {
+    x << "<Grid Name=\"bin_" << j << "\" GridType=\"Collection\" CollectionType=\"Spatial\"><Time Value=\""
+      << phase[static_cast<std::size_t>(j)] << "\"/>\n";
+    for (std::size_t b = 0; b < group.body_count(); ++b) {
+      const geometry::TriMesh& m = group.body(b).stress_free_mesh();
+      const std::string& n = names[b];
+      const std::string nn = std::to_string(m.node_count());
+      x << "<Grid Name=\"" << n << "\"><Topology TopologyType=\"Triangle\" NumberOfElements=\"" << m.triangle_count()
+        << "\"><DataItem Dimensions=\"" << m.triangle_count() << " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+        << h5name << ":/" << n << "/triangles</DataItem></Topology>\n"
+        << "<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"" << nn
+        << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5name << ":/" << n
+        << "/positions_mm</DataItem></Geometry>\n";
+      for (const char* a : {"wss_mean_pa", "wss_rms_pa"})
+        x << "<Attribute Name=\"" << a << "\" Center=\"Node\"><DataItem Dimensions=\"" << nn
+          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5name << ":/" << n << "/bin_" << j << "/" << a
+          << "</DataItem></Attribute>\n";
+      x << "</Grid>\n";
+    }
+    x << "</Grid>\n";
+  }
+  x << "</Grid>\n</Domain></Xdmf>\n";
+  if (!x) throw std::runtime_error(std::string(owner) + ": cannot write fsei_wss_phase.xmf");
 }
 
 }  // namespace systole::scene

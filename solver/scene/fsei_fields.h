@@ -14,6 +14,11 @@
 //   fsei_fields.xmf     a temporal collection: per frame the fluid grid (when it has one), the
 //                       plane and every body. Rewritten after every frame, so a run that stops
 //                       leaves a readable file with the frames so far.
+//   fsei_wss_phase.h5   (write_wss_phase_average, at the end of a run of two or more beats) the
+//   + .xmf              wall shear stress phase-averaged over the beats after the first, per body
+//                       and phase bin j: /<body>/positions_mm and /<body>/triangles (the
+//                       stress-free mesh), /<body>/bin_<j>/wss_mean_pa and wss_rms_pa (per node,
+//                       Pa), /phase (bin centres, t/T) and /beats (beats averaged per bin).
 // Contract: construct on every rank with the same arguments; frame() is collective when it
 // writes the fluid; bodies_frame() is rank 0's alone (no communication: usable after a
 // rank-local failure). Throws std::runtime_error naming the file on I/O failure.
@@ -25,7 +30,16 @@
 #include "solver/geometry/tri_mesh.h"
 #include "solver/structure/contact.h"
 
+namespace systole::diagnostics {
+class FieldPhaseAverage;
+}
+
 namespace systole::scene {
+
+// Writes fsei_wss_phase.h5 and fsei_wss_phase.xmf into dir (rank 0's job): wss holds the
+// group's nodes body after body (names[b] for body b). Throws std::runtime_error on I/O failure.
+void write_wss_phase_average(const std::filesystem::path& dir, const structure::BodyGroup& group,
+                             const std::vector<std::string>& names, const diagnostics::FieldPhaseAverage& wss);
 
 class FseiFieldWriter {
  public:

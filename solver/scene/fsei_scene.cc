@@ -838,6 +838,13 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     }
     return out;
   };
+  // The wall shear stress per shell node phase-averaged over the beats after the first (the
+  // seed's Figs. 16-17), in bins of 0.05 T (ours), written to fsei_wss_phase.h5 at the end.
+  constexpr int kWssPhaseBins = 20;
+  std::size_t shell_nodes_total = 0;
+  for (std::size_t b = 0; b < group.body_count(); ++b) shell_nodes_total += group.body(b).node_count();
+  diagnostics::FieldPhaseAverage wss_phase(shell_nodes_total, 1e-3 * period_ms, kWssPhaseBins, 1);
+  double wss_phase_from_ms = 0;  // > 0: resumed from a checkpoint without the accumulators
   // Doppler-like sample volumes (ours): disks of half the orifice radius (at most 5 mm) on the
   // valves' axes, at the closed mitral leaflets' tips (their coaptation depth below the plane)
   // and at the closed aortic cusps' tips (their height above it); velocities along the flow
@@ -885,6 +892,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
+    std::vector<double> wss_nodes;
+    wss_nodes.reserve(shell_nodes_total);
+    for (const std::vector<double>& v : node_wss_pa(fluid_module.wall_shear())) wss_nodes.insert(wss_nodes.end(), v.begin(), v.end());
+    wss_phase.add(1e-3 * t_ms.back(), wss_nodes);
   };
   auto caps_closed = [&](double t) {  // from the LA stimulus to the next LV stimulus
     const double phase = std::fmod(t, period_ms);
@@ -910,6 +921,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     t = resumed.scalar("scene/time_ms");
     const long samples = static_cast<long>(resumed.get("series/t_ms").size());
     for (auto& [name, v] : series_state) *v = resumed.get("series/" + name, samples);
+    // (a checkpoint of an earlier version has no phase-average accumulators: they start here)
+    wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
+    if (wss_phase_from_ms == 0) wss_phase.import_state(resumed, "scene/wss_phase/");
     set_caps(t);
   } else {
     sample();
@@ -958,6 +972,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         }
         scheduler.export_state(a, "scheduler/");
         for (const auto& [name, v] : series_state) a.put("series/" + name, *v);
+        wss_phase.export_state(a, "scene/wss_phase/");
         if (fields) a.put("scene/field_times_ms", fields->frame_times_ms());
         write_state_file(next_dir / "state.h5", a, fingerprint);
       } catch (const std::exception& e) {
@@ -1159,6 +1174,17 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     m << "carry-over forcing: " << forcing.carry_over_excluded() << " of " << markers.size() << " markers (those within "
       << forcing_parameters.carry_over_exclusion_cells << " h of another body's, at the end) carry nothing over";
     result.notes.push_back(m.str());
+  }
+  if (wss_phase.beats(0) > 0 && !control.output_directory().empty()) {
+    if (is_rank_zero()) {
+      std::vector<std::string> names(deformable.begin(), deformable.end());
+      write_wss_phase_average(control.output_directory(), group, names, wss_phase);
+    }
+    result.notes.push_back("wall shear stress per shell node phase-averaged over " + std::to_string(wss_phase.beats(0)) +
+                           " beats after the first (mean and rms, " + std::to_string(kWssPhaseBins) +
+                           " phase bins" +
+                           (wss_phase_from_ms > 0 ? ", sampled from the resume at " + std::to_string(wss_phase_from_ms) + " ms" : std::string()) +
+                           "): fsei_wss_phase.xmf");
   }
   if (fields) {
     result.notes.push_back(std::to_string(fields->frames()) + " field frames every " + std::to_string(fs.field_interval_ms) +

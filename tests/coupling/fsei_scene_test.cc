@@ -16,7 +16,10 @@
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
 #include "solver/geometry/left_heart.h"
+#include "solver/diagnostics/phase_average.h"
+#include "solver/scene/fsei_fields.h"
 #include "solver/scene/fsei_scene.h"
+#include "solver/structure/shapes.h"
 
 namespace systole::scene {
 namespace {
@@ -181,6 +184,57 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
 // assembled and steps (fluid at its CFL step, structure sub-cycled, loads and nodes exchanged),
 // the LV pressure rises above the LA and the aortic root while the valves stay closed. Without
 // the aorta's ground pressure: the closed aortic valve does not carry it yet (docs/fsei.md).
+// The phase-averaged wall shear stress file (the seed's Figs. 16-17): two bodies, node values
+// j + node/100 + c_k in phase bin j of beat k (3 beats, the first discarded): every body's bins
+// hold mean j + node/100 + mean(c) and rms |c_2 - c_3| / 2, on the stress-free mesh, with an xmf
+// that names them.
+TEST(FseiFields, WssPhaseAverageFileHoldsEveryBodysBins) {
+  structure::ShellMaterials mat;
+  for (auto& t : mat.tissue) t = {13.3e-3, 49.56, 5.29};
+  mat.density_mg_per_mm3 = 1.05;
+  mat.poisson_ratio = 0.5;
+  const auto a = structure::icosphere(10, 1, 1.5, geometry::Tissue::kLvMyocardium, true);
+  auto b = structure::icosphere(5, 2, 1.5, geometry::Tissue::kLaMyocardium, true);
+  structure::BodyGroup group({structure::ShellModel(a, mat, {}), structure::ShellModel(b, mat, {})},
+                             structure::ContactOptions{});
+  const std::size_t na = a.node_count(), n = na + b.node_count();
+  const int bins = 4;
+  const double period = 0.8, c[3] = {50, 1, 2};
+  diagnostics::FieldPhaseAverage wss(n, period, bins, 1);
+  for (int i = 0; i <= 3 * 40; ++i) {  // 40 samples per beat, the last at the start of beat 4
+    const int k = i / 40, j = (i % 40) / 10;
+    std::vector<double> v(n);
+    for (std::size_t q = 0; q < n; ++q) v[q] = j + q / 100.0 + (k < 3 ? c[k] : 0.0);
+    wss.add(i * period / 40, v);
+  }
+  const auto dir = std::filesystem::temp_directory_path() / ("systole-wss-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  write_wss_phase_average(dir, group, {"lv", "la"}, wss);
+  const hid_t file = H5Fopen((dir / "fsei_wss_phase.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  auto read = [&](const std::string& name, std::size_t size) {
+    std::vector<double> out(size);
+    const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+    EXPECT_GE(set, 0) << name;
+    EXPECT_GE(H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), 0) << name;
+    H5Dclose(set);
+    return out;
+  };
+  EXPECT_EQ(read("beats", bins), (std::vector<double>{2, 2, 2, 2}));
+  EXPECT_EQ(read("phase", bins), (std::vector<double>{0.125, 0.375, 0.625, 0.875}));
+  const std::vector<double> mean = read("la/bin_2/wss_mean_pa", b.node_count()), rms = read("la/bin_2/wss_rms_pa", b.node_count());
+  for (std::size_t q = 0; q < b.node_count(); ++q) {
+    EXPECT_NEAR(mean[q], 2 + (na + q) / 100.0 + 1.5, 1e-12) << q;
+    EXPECT_NEAR(rms[q], 0.5, 1e-6) << q;
+  }
+  EXPECT_EQ(read("lv/positions_mm", 3 * na)[0], a.position_mm[0].x());
+  H5Fclose(file);
+  std::ifstream xmf(dir / "fsei_wss_phase.xmf");
+  const std::string text((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("fsei_wss_phase.h5:/la/bin_3/wss_rms_pa"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   const config::Scenario s = scenario(
       "fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aortic_pressure_mmhg", 0.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});

@@ -61,6 +61,43 @@ TEST(PhaseAverage, SmoothPeriodicCurveIsRecoveredAtBinCentres) {
   }
 }
 
+// The field accumulator gives the series function's mean and rms for every value (the step
+// curve with beat offsets and a sine, 3.5 beats, the first discarded, the half beat not folded),
+// and one stopped halfway through beat 3, exported and imported into a new accumulator, ends with
+// the same numbers bitwise.
+TEST(PhaseAverage, FieldAccumulatorMatchesTheSeriesAndSurvivesACheckpoint) {
+  const double period = 0.8;
+  const int bins = 20, per_beat = 200;
+  const double c[4] = {100.0, 1.0, 3.0, -50.0};
+  std::vector<double> t, step, wave;
+  for (int i = 0; i <= 3 * per_beat + per_beat / 2; ++i) {
+    t.push_back(i * period / per_beat);
+    step.push_back((i % per_beat) * bins / per_beat + c[i / per_beat]);
+    wave.push_back(std::sin(2 * M_PI * t.back() / period) * (1 + 0.1 * (i / per_beat)));
+  }
+  FieldPhaseAverage straight(2, period, bins, 1), first(2, period, bins, 1);
+  for (std::size_t i = 0; i < t.size(); ++i) straight.add(t[i], {step[i], wave[i]});
+  const std::size_t stop = 2 * per_beat + per_beat / 2;
+  for (std::size_t i = 0; i < stop; ++i) first.add(t[i], {step[i], wave[i]});
+  StateArchive archive;
+  first.export_state(archive, "wss/");
+  FieldPhaseAverage resumed(2, period, bins, 1);
+  resumed.import_state(archive, "wss/");
+  for (std::size_t i = stop; i < t.size(); ++i) resumed.add(t[i], {step[i], wave[i]});
+  const PhaseAverage a = phase_average(t, step, period, bins, 1), b = phase_average(t, wave, period, bins, 1);
+  for (int j = 0; j < bins; ++j) {
+    EXPECT_EQ(straight.beats(j), 2);
+    EXPECT_NEAR(straight.mean(j)[0], a.mean[j], 1e-12);
+    EXPECT_NEAR(straight.rms(j)[0], a.rms[j], 1e-9);
+    EXPECT_NEAR(straight.mean(j)[1], b.mean[j], 1e-12);
+    EXPECT_NEAR(straight.rms(j)[1], b.rms[j], 1e-9);
+    EXPECT_EQ(resumed.mean(j), straight.mean(j));
+    EXPECT_EQ(resumed.rms(j), straight.rms(j));
+  }
+  EXPECT_THROW(straight.add(3.0, {1.0}), std::invalid_argument);
+  EXPECT_THROW(resumed.import_state(StateArchive{}, "wss/"), std::exception);
+}
+
 TEST(PhaseAverage, TooFewBeatsGiveNothingAndBadInputIsRefused) {
   std::vector<double> t{0, 0.25, 0.5, 0.75, 1.0}, v{1, 2, 3, 4, 5};
   EXPECT_EQ(phase_average(t, v, 1.0, 2, 1).beats, 0);  // one whole beat, discarded
