@@ -303,6 +303,62 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
 // behind the closed valves, stay near the outer fluid's pressure; the note gives the aorta's
 // blood volume started at it (the default aorta's lumen is ≈ 110 ml by its radii and lengths:
 // root ≈ 16, arch ≈ 50, descending ≈ 43 ml).
+// The first 0.08 T of the heart (70 ms at 70 bpm) in the heaviest-tested working setting of
+// docs/fsei.md (sessions 11-13: fsi at coarse, the aorta pre-stressed to 60 mmHg over a 20 ms
+// ramp with its c read in rho U^2, valve gap 1 mm, tissue density 3 g/ml; the seed's forcing,
+// loose coupling): the isovolumic contraction. The valves stay closed (less than 1 ml through
+// either orifice after the ramp, a stroke volume is ~60 ml), the LV pressure rises steadily
+// (every sample above the one 5 ms before from 25 ms on, by more than 10 mmHg over 30-70 ms:
+// 13.2 measured; the prescribed activation rises slowly, the seed's LV reaches ~80 mmHg when its
+// aortic valve opens) and the
+// aortic root keeps most of its ground pressure. The walls' leak is a known defect (docs/fsei.md:
+// 6.8-7.0 ml/s per mmHg with this forcing, measured in sessions 12-13 on this machine): the bound
+// below, 8 ml/s per mmHg, is a regression guard on that measurement, not the tightness the issue
+// asks for ("nothing leaks"), which is not met. ~4 min on one core.
+TEST(FseiScene, TheFirst70MsContractIsovolumically) {
+  const config::Scenario s = scenario(
+      "fsi", {{"fsei", {{"end_time_ms", 70.0}, {"aortic_pretension", "prestress"}, {"aortic_pressure_ramp_ms", 20.0}}},
+              {"tissue", {{"aorta", {{"fung_c_pa", 4312.0}}}, {"density_g_per_ml", 3.0}}},
+              {"geometry", {{"valve_gap_mm", 1.0}}},
+              {"outputs", {{"time_series_interval_ms", 1.0}}}});
+  Quiet control;
+  const RunResult r = run_fsei(s, control);
+  auto series = [&](const std::string& name) -> const std::vector<double>& {
+    for (const auto& x : r.series)
+      if (x.name == name) return x.values;
+    ADD_FAILURE() << "no series " << name;
+    return r.series.front().values;
+  };
+  const auto& t = series("time_s");
+  const auto& p_lv = series("lv_pressure_mmhg");
+  const auto& p_ao = series("aortic_root_pressure_mmhg");
+  const auto& v_lv = series("lv_volume_ml");
+  const auto& q_ao = series("aortic_flow_ml_s");
+  const auto& q_mi = series("mitral_flow_ml_s");
+  ASSERT_EQ(t.size(), 71u);
+  for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
+  auto at = [&](double ms) { return static_cast<std::size_t>(std::lround(ms)); };  // 1-ms samples from 0
+  double through_ao = 0, through_mi = 0, p_mean = 0;
+  for (std::size_t i = at(20); i < at(70); ++i) {
+    through_ao += 0.5e-3 * (q_ao[i] + q_ao[i + 1]);
+    through_mi += 0.5e-3 * (q_mi[i] + q_mi[i + 1]);
+    p_mean += 0.5 * (p_lv[i] + p_lv[i + 1]) / 50;
+  }
+  std::printf("  [measured] 20-70 ms: aortic %.3f ml, mitral %.3f ml; LV %.2f -> %.2f mmHg, %.2f -> %.2f ml; root %.1f mmHg\n",
+              through_ao, through_mi, p_lv[at(20)], p_lv[at(70)], v_lv[at(20)], v_lv[at(70)], p_ao[at(70)]);
+  EXPECT_LT(std::abs(through_ao), 1.0);
+  EXPECT_LT(std::abs(through_mi), 1.0);
+  for (std::size_t i = at(25); i < t.size(); ++i) EXPECT_GT(p_lv[i], p_lv[i - 5]) << t[i];
+  EXPECT_GT(p_lv[at(70)], p_lv[at(30)] + 10);
+  EXPECT_GT(p_ao[at(70)], 20.0);
+  const double leak_ml = (through_mi - through_ao) - (v_lv[at(70)] - v_lv[at(20)]);
+  const double leak_per_mmhg = leak_ml / 0.05 / p_mean;
+  std::printf("  [measured] LV leak %.3f ml over 20-70 ms at %.2f mmHg mean: %.2f ml/s per mmHg\n", leak_ml, p_mean,
+              leak_per_mmhg);
+  EXPECT_GT(leak_ml, 0.0);  // the sign of the defect: blood leaves through the walls
+  EXPECT_LT(leak_per_mmhg, 8.0);
+}
+
 TEST(FseiScene, AortaStartsAtItsGroundPressure) {
   const config::Scenario s =
       scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}});
