@@ -258,7 +258,7 @@ const std::vector<std::string>& fsei_metric_names() {
       "lv_pressure_start_mmhg", "lv_pressure_max_mmhg", "la_pressure_max_mmhg", "aortic_root_pressure_max_mmhg",
       "lv_volume_start_ml", "lv_volume_min_ml", "lv_volume_end_ml", "la_volume_start_ml", "la_volume_end_ml",
       "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
-      "lv_volume_balance_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
+      "lv_volume_balance_ml", "lv_wall_slip_volume_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
       "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "aortic_cusps_wss_max_pa", "simulated_time_ms", "fluid_steps", "structure_substeps",
       "ep_steps", "coupling_intervals", "coupling_passes", "coupling_unconverged_intervals",
       "coupling_max_final_residual", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
@@ -807,6 +807,18 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   RunResult result;
   std::vector<double> t_ms, p_lv, p_la, p_ao, v_lv, v_la, q_ao, q_mi, ke;
   std::vector<double> twist, gls, gcs, u_mitral_tips, u_aortic_tips, wss_cusps;
+  std::vector<double> lv_wall_slip, aorta_wall_slip;
+  // The immersed boundary's leak seen at the walls (ours): the blood's flux through the LV's and
+  // the aorta's markers relative to the walls, −Σ (u(X_b) − V_b)·n_b A_b over each body's active
+  // markers, out of the cavity positive (the tiles' normals point into the cavity, the shells'
+  // convention). A tight wall has 0; the volume balance's leak (lv_volume_balance_ml) is its
+  // integral when the slip at the markers is the whole leak.
+  const auto marker_body_named = [&](std::string_view name) {
+    for (std::size_t k = 0; k < markers.bodies().size(); ++k)
+      if (markers.bodies()[k].name == name) return static_cast<int>(k);
+    throw std::logic_error("fsei: no marker body " + std::string(name));
+  };
+  const int lv_markers = marker_body_named(geometry::kLvBody), aorta_markers = marker_body_named(geometry::kAortaBody);
   // The wall shear stress (eq 27, extrapolated to the wall: ibm::wall_shear_stress) in Pa: per
   // marker the larger of the two sides' for leaflets; per shell node the area-weighted mean of
   // its tiles' values carried back by the tiling maps (ours). Collective.
@@ -866,6 +878,19 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     // the mitral orifice into the LV (+z)
     q_ao.push_back(-disk_flux(fluid, heart.plane.aortic_centre_mm, heart.plane.aortic_radius_mm) * ml_s_per_unit);
     q_mi.push_back(disk_flux(fluid, heart.plane.mitral_centre_mm, heart.plane.mitral_radius_mm) * ml_s_per_unit);
+    {
+      const fluid::Velocity& u = fluid.velocity();
+      const std::vector<Vec3> ub = forcing.transfer().interpolate(ibm::ConstVelocityView{u.u, u.v, u.w});
+      const ibm::MarkerArrays& ma = markers.markers();
+      double lv_out = 0, aorta_out = 0;
+      for (std::size_t mk = 0; mk < ma.size(); ++mk) {
+        if (!markers.active(mk) || (ma.body[mk] != lv_markers && ma.body[mk] != aorta_markers)) continue;
+        const double out = -(ub[mk] - ma.velocity[mk]).dot(ma.normal[mk]) * ma.area[mk];
+        (ma.body[mk] == lv_markers ? lv_out : aorta_out) += out;
+      }
+      lv_wall_slip.push_back(lv_out * ml_s_per_unit);
+      aorta_wall_slip.push_back(aorta_out * ml_s_per_unit);
+    }
     ke.push_back(fluid.diagnostics().kinetic_energy * kinetic_mj_per_unit);
     // the LV wall's twist and global strains from the built (end-diastolic, stress-free) shape
     const diagnostics::WallKinematics wk =
@@ -888,7 +913,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       wss_cusps.push_back(most);
     }
     for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
-                     twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back()})
+                     twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back(),
+                     lv_wall_slip.back(), aorta_wall_slip.back()})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
@@ -914,7 +940,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"v_lv", &v_lv},       {"v_la", &v_la},   {"q_ao", &q_ao},   {"q_mi", &q_mi},
       {"ke", &ke},           {"twist", &twist}, {"gls", &gls},     {"gcs", &gcs},
       {"u_mitral_tips", &u_mitral_tips},        {"u_aortic_tips", &u_aortic_tips},
-      {"wss_cusps", &wss_cusps}};
+      {"wss_cusps", &wss_cusps},               {"lv_wall_slip", &lv_wall_slip},
+      {"aorta_wall_slip", &aorta_wall_slip}};
   double t = 0;
   set_caps(0);
   if (resume_from) {
@@ -1035,7 +1062,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       m.precision(7);
       m << s.scene << " t_ms " << t << " p_lv_mmhg " << p_lv.back() << " p_la_mmhg " << p_la.back() << " p_ao_mmhg "
         << p_ao.back() << " v_lv_ml " << v_lv.back() << " v_la_ml " << v_la.back() << " q_ao_ml_s " << q_ao.back()
-        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back();
+        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back() << " lv_slip_ml_s " << lv_wall_slip.back()
+        << " aorta_slip_ml_s " << aorta_wall_slip.back();
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();
         m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals
@@ -1089,6 +1117,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   for (std::size_t i = 1; i < t_ms.size(); ++i)
     through_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * ((q_ao[i] - q_mi[i]) + (q_ao[i - 1] - q_mi[i - 1]));
   M["lv_volume_balance_ml"] = (v_lv.back() - v_lv.front()) + through_ml;
+  // The same leak seen at the LV's markers (out positive): −lv_volume_balance_ml when the slip at
+  // the markers is the whole leak.
+  double slip_ml = 0;
+  for (std::size_t i = 1; i < t_ms.size(); ++i)
+    slip_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (lv_wall_slip[i] + lv_wall_slip[i - 1]);
+  M["lv_wall_slip_volume_ml"] = slip_ml;
   M["kinetic_energy_max_mj"] = max_of(ke);
   auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
     double best = 0;
@@ -1143,6 +1177,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   add("lv_circumferential_strain", "", gcs);
   add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
   add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
+  add("lv_wall_slip_flux_ml_s", "ml/s", lv_wall_slip);
+  add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   {
     std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);
