@@ -1,5 +1,6 @@
 #pragma once
-// Field frames of scenes "fsei"/"fsi" (fsei.field_interval_ms, docs/fsei.md): what ParaView needs
+// Field frames of scenes "fsei"/"fsi" (every fsei.field_interval_ms and/or at the phases
+// outputs.field_phases of every beat, docs/fsei.md): what ParaView needs
 // to show the blood and the tissue together, in millimetres.
 //   fsei_fluid_<k>.h5   the fluid at frame k, cell-centred: velocity_x/y/z (m/s), pressure
 //                       (mmHg, relative to the box's arbitrary level), vorticity_x/y/z (1/s);

@@ -955,12 +955,23 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   } else {
     sample();
   }
-  // Field frames (fsei.field_interval_ms) from t = 0, into the caller's output directory.
+  // Field frames into the caller's output directory: every fsei.field_interval_ms from t = 0
+  // and/or at the phases outputs.field_phases (t/T) of every beat.
+  const std::vector<double>& field_phases = s.outputs.field_phases;
+  const bool fields_wanted = fs.field_interval_ms > 0 || !field_phases.empty();
+  auto next_phase_frame = [&](double after_ms) {  // the first (k + phase) T later than after_ms
+    double best = 1e300;
+    const double k0 = std::floor(after_ms / period_ms);
+    for (double k : {k0, k0 + 1})
+      for (double phase : field_phases)
+        if ((k + phase) * period_ms > after_ms + 1e-9) best = std::min(best, (k + phase) * period_ms);
+    return best;
+  };
   std::unique_ptr<FseiFieldWriter> fields;
-  long field_frames_done = 0;  // the next frame is at field_frames_done × fsei.field_interval_ms
+  long field_frames_done = 0;  // the next interval frame is at field_frames_done × fsei.field_interval_ms
   std::vector<double> resumed_frames_ms;
   if (resume_from && resumed.has("scene/field_times_ms")) resumed_frames_ms = resumed.get("scene/field_times_ms");
-  if (fs.field_interval_ms > 0 && !control.output_directory().empty()) {
+  if (fields_wanted && !control.output_directory().empty()) {
     fluid::FluidSolver::FieldSelection units;
     units.velocity_scale = kUmMmPerMs;                 // U (mm/ms = m/s)
     units.pressure_scale = mmhg_per_unit;              // ρU² in mmHg
@@ -970,10 +981,13 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     fields = std::make_unique<FseiFieldWriter>(control.output_directory(), g, kDmMm,
                                                heart.body(geometry::kValvularPlaneBody), group, names, units,
                                                resume_from ? &resumed_frames_ms : nullptr);
-    if (!resume_from) fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
+    const bool phase_zero = std::find(field_phases.begin(), field_phases.end(), 0.0) != field_phases.end();
+    if (!resume_from && (fs.field_interval_ms > 0 || phase_zero))
+      fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
     // resumed: the next frame after the checkpoint's time, whether the frames continue in the
     // same directory or start anew (a new directory, another interval)
-    field_frames_done = resume_from ? static_cast<long>(std::floor(t / fs.field_interval_ms + 1e-9)) + 1 : fields->frames();
+    if (fs.field_interval_ms > 0)
+      field_frames_done = resume_from ? static_cast<long>(std::floor(t / fs.field_interval_ms + 1e-9)) + 1 : 1;
   }
   // Checkpoints every fsei.checkpoint_interval_ms of simulated time (at a sample), and when the
   // run is cancelled (a worker that stops hands the job back at that point). Collective.
@@ -1021,7 +1035,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     const double beat0 = std::floor(t / period_ms + 1e-9) * period_ms;
     for (double sw : {beat0 + period_ms - s.av_delay_ms, beat0 + period_ms})
       if (sw > t + 1e-9 && sw < next) next = sw;
-    const double next_field = fields ? static_cast<double>(field_frames_done) * fs.field_interval_ms : 1e300;
+    const double next_interval_frame =
+        fields && fs.field_interval_ms > 0 ? static_cast<double>(field_frames_done) * fs.field_interval_ms : 1e300;
+    const double next_field = fields ? std::min(next_interval_frame, next_phase_frame(t)) : 1e300;
     const bool field_only = next_field < next - 1e-9;
     if (field_only) next = next_field;
     try {
@@ -1048,7 +1064,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     set_caps(t);
     if (fields && std::abs(t - next_field) < 1e-9) {
       fields->frame(t, fluid, group, node_wss_pa(fluid_module.wall_shear()));
-      ++field_frames_done;
+      if (std::abs(t - next_interval_frame) < 1e-9) ++field_frames_done;
     }
     if (field_only) continue;
     sample();
@@ -1223,10 +1239,21 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                            "): fsei_wss_phase.xmf");
   }
   if (fields) {
-    result.notes.push_back(std::to_string(fields->frames()) + " field frames every " + std::to_string(fs.field_interval_ms) +
-                           " ms: fsei_fields.xmf (fluid fsei_fluid_<k>.h5, bodies fsei_bodies.h5)");
-  } else if (fs.field_interval_ms > 0) {
-    result.notes.push_back("fields were requested (fsei.field_interval_ms) but the caller gave no output directory: none written");
+    std::ostringstream m;
+    m << fields->frames() << " field frames";
+    if (fs.field_interval_ms > 0) m << " every " << fs.field_interval_ms << " ms";
+    if (!field_phases.empty()) {
+      m << (fs.field_interval_ms > 0 ? " and" : "") << " at t/T =";
+      for (double phase : field_phases) m << " " << phase;
+      m << " of every beat";
+    }
+    m << ": fsei_fields.xmf (fluid fsei_fluid_<k>.h5, bodies fsei_bodies.h5)";
+    if (!s.outputs.fields.empty()) m << "; outputs.fields does not select among them: every frame has all the fields";
+    result.notes.push_back(m.str());
+  } else if (fields_wanted) {
+    result.notes.push_back(
+        "fields were requested (fsei.field_interval_ms, outputs.field_phases) but the caller gave no output directory: none "
+        "written");
   }
   if (fs.aortic_pressure_mmhg > 0) {
     std::ostringstream m;

@@ -438,6 +438,33 @@ TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
 // 0.2 ms that are not samples; the bodies start at their built shape and move; the fluid's
 // pressure is in mmHg (the aorta's 60 mmHg ground pressure at the aortic-root probe, relative
 // to the box corner) and compressed, the xmf names every frame's files.
+// Frames at requested phases of every beat (outputs.field_phases, without an interval): at
+// 240 bpm (T = 250 ms) the phases 0.0004 and 0.0008 are 0.1 and 0.2 ms; no frame at t = 0, and
+// the note says which frames were written.
+TEST(FseiScene, FieldFramesAtRequestedPhases) {
+  const auto dir = fresh_directory("phases");
+  const config::Scenario s =
+      scenario("fsi", {{"heart_rate_bpm", 240.0},
+                       {"fsei", {{"end_time_ms", 0.3}}},
+                       {"outputs", {{"time_series_interval_ms", 0.3}, {"fields", {"velocity"}}, {"field_phases", {0.0008, 0.0004}}}}});
+  ToDirectory control(dir);
+  const RunResult r = run_fsei(s, control);
+  EXPECT_EQ(r.metrics.at("field_frames"), 2.0);
+  std::vector<hsize_t> dims;
+  for (int k = 0; k < 2; ++k) {
+    const auto t = read_doubles(dir / "fsei_bodies.h5", "frames/" + std::to_string(k) + "/time_ms", dims);
+    ASSERT_EQ(t.size(), 1u);
+    EXPECT_NEAR(t[0], 0.1 * (k + 1), 1e-9) << k;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "fsei_fluid_2.h5"));
+  bool noted = false;
+  for (const auto& n : r.notes)
+    noted = noted || (n.find("2 field frames at t/T = 0.0008 0.0004 of every beat") != std::string::npos &&
+                      n.find("outputs.fields does not select") != std::string::npos);
+  EXPECT_TRUE(noted);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
   const auto dir = fresh_directory("fields");
   const config::Scenario s = scenario(
