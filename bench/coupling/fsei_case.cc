@@ -2,7 +2,8 @@
 // path=value overrides, prints every sample on stderr as it comes (so a run that stops with a
 // diagnosis leaves its trend) and the metrics on stdout: how the scenes are studied.
 //   fsei_case fsi|fsei [out=DIR] [checkpoint=DIR] [fsei.end_time_ms=16] [fsei.resolution=coarse] ...
-// out=DIR: the output directory (field frames with fsei.field_interval_ms > 0).
+// out=DIR: the output directory: the result files (result.h5, metrics.json, time_series.csv, ...)
+// at the end, field frames with fsei.field_interval_ms > 0 or outputs.field_phases.
 // checkpoint=DIR: checkpoints every fsei.checkpoint_interval_ms into DIR, and a resume from
 // the one found there (docs/fsei.md, "Checkpoint and restart").
 #include <cstdio>
@@ -13,6 +14,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
+#include "solver/io/result_writer.h"
 #include "solver/scene/fsei_scene.h"
 
 namespace {
@@ -58,6 +60,11 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       for (const auto& [k, v] : r.metrics) std::printf("%s = %.6g\n", k.c_str(), v);
       for (const auto& n : r.notes) std::printf("note: %s\n", n.c_str());
+      // out=DIR also gets the job's result files (result.h5 with the per-beat metrics and phase
+      // averages, metrics.json, time_series.csv, ...), as systole-solve --out writes them
+      if (!out.empty())
+        for (const auto& f : systole::io::write_results(out, r, {systole::config::to_json(s).dump(), ""}))
+          std::printf("wrote %s\n", f.c_str());
     }
   } catch (const std::exception& e) {
     if (rank == 0) std::fprintf(stderr, "fsei_case: %s\n", e.what());

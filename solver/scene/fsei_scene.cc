@@ -808,6 +808,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   std::vector<double> t_ms, p_lv, p_la, p_ao, v_lv, v_la, q_ao, q_mi, ke;
   std::vector<double> twist, gls, gcs, u_mitral_tips, u_aortic_tips, wss_cusps;
   std::vector<double> lv_wall_slip, aorta_wall_slip;
+  // Series added after a checkpoint's version (not in it) cannot be resumed: they are left out of
+  // the result (and of later checkpoints) with a note, never filled in.
+  bool wall_slip_series = true;
   // The immersed boundary's leak seen at the walls (ours): the blood's flux through the LV's and
   // the aorta's markers relative to the walls, −Σ (u(X_b) − V_b)·n_b A_b over each body's active
   // markers, out of the cavity positive (the tiles' normals point into the cavity, the shells'
@@ -888,8 +891,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         const double out = -(ub[mk] - ma.velocity[mk]).dot(ma.normal[mk]) * ma.area[mk];
         (ma.body[mk] == lv_markers ? lv_out : aorta_out) += out;
       }
-      lv_wall_slip.push_back(lv_out * ml_s_per_unit);
-      aorta_wall_slip.push_back(aorta_out * ml_s_per_unit);
+      if (wall_slip_series) {
+        lv_wall_slip.push_back(lv_out * ml_s_per_unit);
+        aorta_wall_slip.push_back(aorta_out * ml_s_per_unit);
+      }
     }
     ke.push_back(fluid.diagnostics().kinetic_energy * kinetic_mj_per_unit);
     // the LV wall's twist and global strains from the built (end-diastolic, stress-free) shape
@@ -914,7 +919,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     }
     for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
                      twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back(),
-                     lv_wall_slip.back(), aorta_wall_slip.back()})
+                     wall_slip_series ? lv_wall_slip.back() : 0.0, wall_slip_series ? aorta_wall_slip.back() : 0.0})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
@@ -947,7 +952,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (resume_from) {
     t = resumed.scalar("scene/time_ms");
     const long samples = static_cast<long>(resumed.get("series/t_ms").size());
-    for (auto& [name, v] : series_state) *v = resumed.get("series/" + name, samples);
+    wall_slip_series = resumed.has("series/lv_wall_slip");
+    for (auto& [name, v] : series_state)
+      if (wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip)) *v = resumed.get("series/" + name, samples);
     // (a checkpoint of an earlier version has no phase-average accumulators: they start here)
     wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
     if (wss_phase_from_ms == 0) wss_phase.import_state(resumed, "scene/wss_phase/");
@@ -1012,7 +1019,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
           a.put_scalar("ep_module/offset_ms", ep_clock->offset_ms());
         }
         scheduler.export_state(a, "scheduler/");
-        for (const auto& [name, v] : series_state) a.put("series/" + name, *v);
+        for (const auto& [name, v] : series_state)
+          if (v->size() == t_ms.size()) a.put("series/" + name, *v);
         wss_phase.export_state(a, "scene/wss_phase/");
         if (fields) a.put("scene/field_times_ms", fields->frame_times_ms());
         write_state_file(next_dir / "state.h5", a, fingerprint);
@@ -1078,8 +1086,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       m.precision(7);
       m << s.scene << " t_ms " << t << " p_lv_mmhg " << p_lv.back() << " p_la_mmhg " << p_la.back() << " p_ao_mmhg "
         << p_ao.back() << " v_lv_ml " << v_lv.back() << " v_la_ml " << v_la.back() << " q_ao_ml_s " << q_ao.back()
-        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back() << " lv_slip_ml_s " << lv_wall_slip.back()
-        << " aorta_slip_ml_s " << aorta_wall_slip.back();
+        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back();
+      if (wall_slip_series)
+        m << " lv_slip_ml_s " << lv_wall_slip.back() << " aorta_slip_ml_s " << aorta_wall_slip.back();
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();
         m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals
@@ -1135,10 +1144,15 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["lv_volume_balance_ml"] = (v_lv.back() - v_lv.front()) + through_ml;
   // The same leak seen at the LV's markers (out positive): −lv_volume_balance_ml when the slip at
   // the markers is the whole leak.
-  double slip_ml = 0;
-  for (std::size_t i = 1; i < t_ms.size(); ++i)
-    slip_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (lv_wall_slip[i] + lv_wall_slip[i - 1]);
-  M["lv_wall_slip_volume_ml"] = slip_ml;
+  if (wall_slip_series) {
+    double slip_ml = 0;
+    for (std::size_t i = 1; i < t_ms.size(); ++i)
+      slip_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (lv_wall_slip[i] + lv_wall_slip[i - 1]);
+    M["lv_wall_slip_volume_ml"] = slip_ml;
+  } else {
+    result.notes.push_back("resumed from a checkpoint without the wall-slip series: lv_wall_slip_flux_ml_s, "
+                           "aorta_wall_slip_flux_ml_s and lv_wall_slip_volume_ml are not reported");
+  }
   M["kinetic_energy_max_mj"] = max_of(ke);
   auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
     double best = 0;
@@ -1193,8 +1207,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   add("lv_circumferential_strain", "", gcs);
   add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
   add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
-  add("lv_wall_slip_flux_ml_s", "ml/s", lv_wall_slip);
-  add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
+  if (wall_slip_series) {
+    add("lv_wall_slip_flux_ml_s", "ml/s", lv_wall_slip);
+    add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
+  }
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   {
     std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);
