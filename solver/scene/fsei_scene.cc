@@ -1223,10 +1223,16 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         if (!M.count(key)) M[key] = value;
     if (s.outputs.metrics) result.beats = std::move(beats);
     // Phase averages over the whole beats after the first (the seed's statistics), in bins of
-    // 0.01 T (ours) or one sample interval when the sampling is coarser.
-    const int bins = std::min(100, static_cast<int>(std::floor(period_ms / dt_sample)));
-    if (M["beats_completed"] >= 2 && bins >= 1)
-      result.phase_averaged = diagnostics::phase_averaged_series(result.series, 1e-3 * period_ms, bins, 1);
+    // 0.01 T (ours), or of two sample intervals when the sampling is coarser (so that every bin
+    // holds a sample).
+    const int bins = std::min(100, static_cast<int>(std::floor(period_ms / (2 * dt_sample))));
+    if (M["beats_completed"] >= 2 && bins >= 1) {
+      try {
+        result.phase_averaged = diagnostics::phase_averaged_series(result.series, 1e-3 * period_ms, bins, 1);
+      } catch (const std::invalid_argument& e) {  // the run's results stand without them
+        result.notes.push_back(std::string("phase averages not computed: ") + e.what());
+      }
+    }
   }
   result.notes.push_back("scene " + s.scene + " at resolution " + fs.resolution + " (" + std::to_string(pts.nx) + "x" +
                          std::to_string(pts.ny) + "x" + std::to_string(pts.nz) + " points), " +
