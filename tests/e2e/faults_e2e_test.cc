@@ -50,7 +50,7 @@ TEST(FaultsE2E, KilledWorkerJobIsRequeuedAndCompletes) {
   const fs::path dir = make_temp_dir("killworker");
   {
     ServerProcess server(dir, 1, 2, /*lease_ms=*/3000);
-    const std::string id = submit(server, slow_scenario(20));
+    const std::string id = submit(server, slow_scenario(150));
     ASSERT_TRUE(wait_until([&] { return has_progress(server, id); }, seconds(60), milliseconds(100))) << server.log();
     const auto pids = server.worker_pids();
     ASSERT_FALSE(pids.empty()) << "no worker process found";
@@ -98,9 +98,10 @@ TEST(FaultsE2E, KilledServerKeepsEveryJobAndResult) {
     ServerProcess server(dir, 1, 1, /*lease_ms=*/3000);
     done_id = submit(server, {{"scene", "lumped"}, {"beats", 3}, {"periodicity_tolerance", 0}});
     ASSERT_TRUE(wait_for_state(server, done_id, v1::SUCCEEDED, seconds(60))) << server.log();
-    running_id = submit(server, slow_scenario(15));
+    running_id = submit(server, slow_scenario(150));
     queued_id = submit(server, {{"scene", "lumped"}, {"beats", 2}, {"periodicity_tolerance", 0}});
-    ASSERT_TRUE(wait_until([&] { return has_progress(server, running_id); }, seconds(60), milliseconds(100)));
+    ASSERT_TRUE(wait_until([&] { return has_progress(server, running_id); }, seconds(60), milliseconds(100)))
+        << "job " << running_id << " state " << get_job(server, running_id).state() << "\n" << server.log();
     EXPECT_EQ(get_job(server, queued_id).state(), v1::QUEUED);
     const v1::Result result = get_result(server, done_id);
     for (const auto& a : result.artifacts())
