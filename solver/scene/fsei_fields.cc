@@ -30,6 +30,28 @@ std::vector<double> flat(const std::vector<geometry::Vec3>& v) {
   return out;
 }
 
+std::vector<std::int32_t> flat_triangles(const geometry::TriMesh& m) {
+  std::vector<std::int32_t> tri;
+  tri.reserve(3 * m.triangle_count());
+  for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
+  return tri;
+}
+
+// XDMF items pointing into an HDF5 file: n nodal values of comps components (doubles), and a
+// triangle topology of nt triangles (int32 rows).
+std::string xdmf_nodes(std::size_t n, int comps, const std::string& file, const std::string& set) {
+  std::ostringstream d;
+  d << "<DataItem Dimensions=\"" << n;
+  if (comps > 1) d << ' ' << comps;
+  d << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ":/" << set << "</DataItem>";
+  return d.str();
+}
+std::string xdmf_triangles(std::size_t nt, const std::string& file, const std::string& set) {
+  return "<Topology TopologyType=\"Triangle\" NumberOfElements=\"" + std::to_string(nt) + "\"><DataItem Dimensions=\"" +
+         std::to_string(nt) + " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" + file + ":/" + set +
+         "</DataItem></Topology>\n";
+}
+
 }  // namespace
 
 FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
@@ -105,8 +127,7 @@ void FseiFieldWriter::create_bodies_file() const {
   H5Gclose(H5Gcreate2(file, "mesh", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
   H5Gclose(H5Gcreate2(file, "frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
   auto triangles = [&](const geometry::TriMesh& m, const std::string& name) {
-    std::vector<std::int32_t> tri;
-    for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
+    const std::vector<std::int32_t> tri = flat_triangles(m);
     write_h5_dataset(file, "mesh/" + name + "_triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3,
                      "fsei fields");
   };
@@ -188,17 +209,9 @@ void FseiFieldWriter::write_xmf() const {
       return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + file +
              ":/" + set + "</DataItem>";
     };
-    auto nodes = [&](std::size_t n, int comps, const std::string& set) {
-      std::ostringstream d;
-      d << "<DataItem Dimensions=\"" << n;
-      if (comps > 1) d << ' ' << comps;
-      d << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << kBodiesFile << ":/" << set << "</DataItem>";
-      return d.str();
-    };
+    auto nodes = [&](std::size_t n, int comps, const std::string& set) { return xdmf_nodes(n, comps, kBodiesFile, set); };
     auto topology = [&](std::size_t nt, const std::string& name) {
-      return "<Topology TopologyType=\"Triangle\" NumberOfElements=\"" + std::to_string(nt) +
-             "\"><DataItem Dimensions=\"" + std::to_string(nt) + " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" +
-             std::string(kBodiesFile) + ":/mesh/" + name + "_triangles</DataItem></Topology>\n";
+      return xdmf_triangles(nt, kBodiesFile, "mesh/" + name + "_triangles");
     };
     x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
       << "  <Grid Name=\"fsei\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
@@ -284,8 +297,7 @@ void write_wss_phase_average(const std::filesystem::path& dir, const structure::
     const geometry::TriMesh& m = group.body(b).stress_free_mesh();
     const std::string& n = names.at(b);
     H5Gclose(H5Gcreate2(file, n.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    std::vector<std::int32_t> tri;
-    for (const auto& t : m.tri) tri.insert(tri.end(), t.begin(), t.end());
+    const std::vector<std::int32_t> tri = flat_triangles(m);
     write_h5_dataset(file, n + "/triangles", H5T_NATIVE_INT32, tri.data(), m.triangle_count(), 3, owner);
     const std::vector<double> x = flat(m.position_mm);
     write_h5_dataset(file, n + "/positions_mm", H5T_NATIVE_DOUBLE, x.data(), m.node_count(), 3, owner);
@@ -299,8 +311,10 @@ void write_wss_phase_average(const std::filesystem::path& dir, const structure::
     offset += m.node_count();
   }
   H5Fclose(file);
-  // ParaView: a temporal collection over the phase bins (time = t/T), every body in each.
-  std::ofstream x(dir / "fsei_wss_phase.xmf");
+  // ParaView: a temporal collection over the phase bins (time = t/T), every body in each;
+  // written to a temporary name and renamed, as the frames' xmf.
+  const std::filesystem::path xmf = dir / "fsei_wss_phase.xmf", tmp = dir / "fsei_wss_phase.xmf.tmp";
+  std::ofstream x(tmp);
   x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\"><Domain>\n"
     << "<Grid Name=\"wss_phase_average\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   for (int j = 0; j < bins; ++j) {
@@ -309,23 +323,20 @@ void write_wss_phase_average(const std::filesystem::path& dir, const structure::
     for (std::size_t b = 0; b < group.body_count(); ++b) {
       const geometry::TriMesh& m = group.body(b).stress_free_mesh();
       const std::string& n = names[b];
-      const std::string nn = std::to_string(m.node_count());
-      x << "<Grid Name=\"" << n << "\"><Topology TopologyType=\"Triangle\" NumberOfElements=\"" << m.triangle_count()
-        << "\"><DataItem Dimensions=\"" << m.triangle_count() << " 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
-        << h5name << ":/" << n << "/triangles</DataItem></Topology>\n"
-        << "<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"" << nn
-        << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5name << ":/" << n
-        << "/positions_mm</DataItem></Geometry>\n";
+      x << "<Grid Name=\"" << n << "\">" << xdmf_triangles(m.triangle_count(), h5name, n + "/triangles")
+        << "<Geometry GeometryType=\"XYZ\">" << xdmf_nodes(m.node_count(), 3, h5name, n + "/positions_mm")
+        << "</Geometry>\n";
       for (const char* a : {"wss_mean_pa", "wss_rms_pa"})
-        x << "<Attribute Name=\"" << a << "\" Center=\"Node\"><DataItem Dimensions=\"" << nn
-          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5name << ":/" << n << "/bin_" << j << "/" << a
-          << "</DataItem></Attribute>\n";
+        x << "<Attribute Name=\"" << a << "\" Center=\"Node\">"
+          << xdmf_nodes(m.node_count(), 1, h5name, n + "/bin_" + std::to_string(j) + "/" + a) << "</Attribute>\n";
       x << "</Grid>\n";
     }
     x << "</Grid>\n";
   }
   x << "</Grid>\n</Domain></Xdmf>\n";
-  if (!x) throw std::runtime_error(std::string(owner) + ": cannot write fsei_wss_phase.xmf");
+  x.close();
+  if (!x) throw std::runtime_error(std::string(owner) + ": cannot write " + tmp.string());
+  std::filesystem::rename(tmp, xmf);
 }
 
 }  // namespace systole::scene
