@@ -5,6 +5,21 @@
 #include <stdexcept>
 
 namespace systole::diagnostics {
+namespace {
+// Where a sample at t_s falls: beat k (0-based, [kT, (k+1)T), a sample within 1e-9 s below a
+// beat's start counted in it) and phase bin j; a sample on a bin's lower edge (to round-off)
+// belongs to that bin.
+struct PhaseSlot {
+  long beat;
+  std::size_t bin;
+};
+PhaseSlot phase_slot(double t_s, double period_s, int bins) {
+  const double beats_in = t_s / period_s;
+  const long k = static_cast<long>(std::floor(beats_in + 1e-9 / period_s));
+  const double phase = std::max(0.0, beats_in - static_cast<double>(k));
+  return {k, std::min(static_cast<std::size_t>(bins - 1), static_cast<std::size_t>(std::floor(phase * bins + 1e-9)))};
+}
+}  // namespace
 
 PhaseAverage phase_average(const std::vector<double>& time_s, const std::vector<double>& values, double period_s,
                            int bins, int discard) {
@@ -27,14 +42,9 @@ PhaseAverage phase_average(const std::vector<double>& time_s, const std::vector<
   std::vector<double> value(static_cast<std::size_t>(out.beats) * nb, 0.0);
   std::vector<int> count(value.size(), 0);
   for (std::size_t i = 0; i < time_s.size(); ++i) {
-    const double beats_in = time_s[i] / period_s;
-    int k = static_cast<int>(std::floor(beats_in + tol / period_s));
-    double phase = beats_in - k;
-    if (phase < 0) phase = 0;  // within the tolerance below a beat's start
-    if (k < discard || k >= whole) continue;
-    // a sample on a bin's lower edge (to round-off) belongs to that bin
-    const auto j = std::min(nb - 1, static_cast<std::size_t>(std::floor(phase * bins + 1e-9)));
-    const std::size_t slot = static_cast<std::size_t>(k - discard) * nb + j;
+    const PhaseSlot p = phase_slot(time_s[i], period_s, bins);
+    if (p.beat < discard || p.beat >= whole) continue;
+    const std::size_t slot = static_cast<std::size_t>(p.beat - discard) * nb + p.bin;
     value[slot] += values[i];
     ++count[slot];
   }
@@ -90,15 +100,12 @@ void FieldPhaseAverage::add(double t_s, const std::vector<double>& values) {
   if (values.size() != size_)
     throw std::invalid_argument("FieldPhaseAverage: " + std::to_string(values.size()) + " values, expected " +
                                 std::to_string(size_));
-  const double tol = 1e-9;
-  const double beats_in = t_s / period_s_;
-  const long k = static_cast<long>(std::floor(beats_in + tol / period_s_));
-  if (k != beat_) {
+  const PhaseSlot p = phase_slot(t_s, period_s_, bins_);
+  if (p.beat != beat_) {
     if (beat_ >= 0) fold();
-    beat_ = k;
+    beat_ = p.beat;
   }
-  const double phase = std::max(0.0, beats_in - static_cast<double>(k));
-  const auto j = std::min(static_cast<std::size_t>(bins_ - 1), static_cast<std::size_t>(std::floor(phase * bins_ + 1e-9)));
+  const std::size_t j = p.bin;
   for (std::size_t i = 0; i < size_; ++i) sum_[j * size_ + i] += values[i];
   count_[j] += 1;
 }

@@ -905,8 +905,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     gcs.push_back(wk.circumferential_strain);
     u_mitral_tips.push_back(disk_mean_w(fluid, mitral_tips, mitral_disk_mm) * kUmMmPerMs);
     u_aortic_tips.push_back(-disk_mean_w(fluid, aortic_tips, aortic_disk_mm) * kUmMmPerMs);
+    // the wall shear stress, once per sample (collective: the probes twice over every marker)
+    const ibm::WallShear w = fluid_module.wall_shear();
     {  // the aortic cusps' largest wall shear stress (the seed's "> 3 Pa at the tips at peak systole")
-      const ibm::WallShear w = fluid_module.wall_shear();
       const ibm::MarkerArrays& ma = markers.markers();
       double most = 0;
       for (std::size_t mk = 0; mk < ma.size(); ++mk) {
@@ -925,7 +926,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
     std::vector<double> wss_nodes;
     wss_nodes.reserve(shell_nodes_total);
-    for (const std::vector<double>& v : node_wss_pa(fluid_module.wall_shear())) wss_nodes.insert(wss_nodes.end(), v.begin(), v.end());
+    for (const std::vector<double>& v : node_wss_pa(w)) wss_nodes.insert(wss_nodes.end(), v.begin(), v.end());
     wss_phase.add(1e-3 * t_ms.back(), wss_nodes);
   };
   auto caps_closed = [&](double t) {  // from the LA stimulus to the next LV stimulus
