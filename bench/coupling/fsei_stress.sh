@@ -4,8 +4,10 @@
 # (fsei.sync_step_ms and fluid.max_dt_ms, x1 = 0.1 ms), two runs at a time. Each run must either
 # complete with finite metrics or stop with a diagnosis naming the module, the place and the
 # time; anything else (a crash, a NaN metric, a hang past TIMEOUT_S) is marked BAD. EXTRA adds
-# path=value settings to every run.
-#   [END_MS=10] [EXTRA="fsei.aortic_pressure_mmhg=0"] bench/coupling/fsei_stress.sh [build/bin/fsei_case] > table.md
+# path=value settings to every run. The stiffness factor scales each tissue's Fung c from its base
+# value, the default's unless C_LV, C_LA, C_LEAFLETS or C_AORTA (Pa) set another (a setting whose
+# EXTRA changes a c must give it here too: the factor's c is set after EXTRA).
+#   [END_MS=10] [EXTRA="fsei.aortic_pressure_mmhg=0"] [C_AORTA=4312] bench/coupling/fsei_stress.sh [build/bin/fsei_case] > table.md
 set -u
 exe=${1:-build/bin/fsei_case}
 end_ms=${END_MS:-10}
@@ -21,7 +23,8 @@ run_one() {
   args+=(${EXTRA:-})
   for t in lv la mitral_leaflets aortic_leaflets aorta; do
     local c
-    case $t in lv) c=13.3 ;; la) c=12.1 ;; mitral_leaflets | aortic_leaflets) c=9.7 ;; aorta) c=11.3 ;; esac
+    case $t in lv) c=${C_LV:-13.3} ;; la) c=${C_LA:-12.1} ;; mitral_leaflets | aortic_leaflets) c=${C_LEAFLETS:-3702} ;;
+      aorta) c=${C_AORTA:-11.3} ;; esac
     args+=("tissue.$t.fung_c_pa=$(awk -v c="$c" -v k="$k" 'BEGIN { printf "%g", c * k }')")
   done
   local t0=$SECONDS
@@ -47,7 +50,7 @@ run_one() {
   printf '| %s | x%s | x%s (%s ms) | %s | %s | %s s |\n' "$hr" "$k" "$m" "$sync" "${last:-0}" "$verdict" "$wall"
 }
 export -f run_one
-export exe end_ms timeout_s work EXTRA
+export exe end_ms timeout_s work EXTRA C_LV C_LA C_LEAFLETS C_AORTA
 echo "| heart rate (bpm) | stiffness | step | last sample (ms) | outcome | wall |"
 echo "|---|---|---|---|---|---|"
 id=0

@@ -31,7 +31,9 @@ int main(int argc, char** argv) {
                                       {"icosphere_level", &o.icosphere_level},
                                       {"forcing_iterations", &o.forcing_iterations},
                                       {"strong_passes", &o.strong_passes}};
-  std::map<std::string, bool*> flag{{"carry_over", &o.carry_over}, {"strong", &o.strong_coupling}};
+  std::map<std::string, bool*> flag{{"carry_over", &o.carry_over},
+                                    {"strong", &o.strong_coupling},
+                                    {"divergence_free_kernel", &o.divergence_free_kernel}};
   int rc = 0;
   try {
     for (int a = 1; a < argc; ++a) {
@@ -52,6 +54,10 @@ int main(int argc, char** argv) {
                   "mean wall pressure %.4g\n",
                   r.min_volume_ratio, r.max_volume_ratio, r.fluid_steps, r.shell_substeps, r.passes,
                   r.unconverged_intervals, r.mean_wall_pressure);
+      const double lost = r.initial_volume_mm3 * (1 - r.volume_ratio.back());
+      std::printf("volume lost %.4g mm3 (%.3f %%); sampled every %g ms: through the markers (slip) %.4g mm3, swept by "
+                  "the markers' velocities %.4g mm3\n",
+                  lost, 100 * lost / r.initial_volume_mm3, o.sample_ms, r.slip_volume_mm3, r.told_volume_mm3);
       if (!r.stopped.empty()) std::printf("stopped: %s\n", r.stopped.c_str());
     }
   } catch (const std::exception& e) {

@@ -564,6 +564,12 @@ std::vector<Param> build_table() {
                            "spacings of another body's markers carry no force over (ours; anti-windup where two "
                            "bodies' targets conflict in one support, e.g. leaflets meeting at a commissure); 0: "
                            "every marker carries. docs/fsei.md."));
+  t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
+                             "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
+                             "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "
+                             "quadratic along a velocity component's own direction and linear across, after "
+                             "Gruninger & Griffith 2025; the interpolated velocity has no flux through a closed "
+                             "wall, so the walls stop leaking their volume: docs/fsei.md, session 14)."));
   t.push_back(SYSTOLE_CHOICE(fsei.aortic_pretension, "outer_load",
                              (std::vector<std::string_view>{"outer_load", "prestress"}),
                              "Scenes 'fsei'/'fsi': how the aorta's wall holds fsei.aortic_pressure_mmhg (ours; the "

@@ -220,6 +220,7 @@ struct Fsei {
   double forcing_carry_over_factor;     // ibm::ForcingParameters::carry_over_factor (ours)
   std::string aortic_pretension;        // "outer_load" | "prestress": how the wall holds the ground pressure (ours)
   double forcing_carry_over_exclusion_cells;  // ibm::ForcingParameters::carry_over_exclusion_cells (ours)
+  std::string forcing_kernel;           // "mls" | "divergence_free": ibm::ForcingParameters::kernel (ours)
 };
 
 struct Scenario {

@@ -36,7 +36,7 @@ void validate(const ForcingParameters& p) {
 }
 
 DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, ForcingParameters parameters)
-    : slabs_(slabs), markers_(markers), par_((validate(parameters), parameters)), transfer_(slabs, markers) {
+    : slabs_(slabs), markers_(markers), par_((validate(parameters), parameters)), transfer_(slabs, markers, parameters.kernel) {
   transfer_.set_rebuild_tolerance(par_.rebuild_tolerance_cells * markers.h());
   if (par_.iterations > 1 || par_.carry_over) {
     work_u_ = std::make_unique<grid::XFaceField>(slabs);

@@ -42,6 +42,11 @@ struct ForcingParameters {
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
   double rebuild_tolerance_cells = 0;
+  // The markers' interpolation and spreading weights (TransferKernel): the seed's MLS, or the
+  // divergence-free composite B-splines (ours), whose interpolated velocity has no flux through a
+  // closed wall: the forcing can no longer hold U = V at every marker while the enclosed volume
+  // changes (the IB's volume leak, docs/fsei.md session 14).
+  TransferKernel kernel = TransferKernel::mls;
 };
 void validate(const ForcingParameters& p);
 

@@ -210,6 +210,49 @@ void mls_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array
   }
 }
 
+double bspline_quadratic(double r) {
+  r = std::abs(r);
+  if (r <= 0.5) return 0.75 - r * r;
+  if (r < 1.5) return 0.5 * (1.5 - r) * (1.5 - r);
+  return 0;
+}
+
+double bspline_hat(double r) {
+  r = std::abs(r);
+  return r < 1 ? 1 - r : 0;
+}
+
+void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out) {
+  // The six axes [direction][0: faces (B₂), 1: centres (B₁)], on the same blocks as MLS.
+  Axis ax[3][2];
+  const double spacing[3] = {g.dx(), g.dy(), g.dz()};
+  for (int d = 0; d < 3; ++d) {
+    const double xc = X[d] / spacing[d];
+    for (int centred = 0; centred < 2; ++centred) {
+      const double offset = centred ? 0.5 : 0.0;
+      Axis& A = ax[d][centred];
+      A.first = mls_nearest(xc - offset) - 1;
+      const int lo = d < 2 ? -(1 << 30) : (centred ? 0 : 1), hi = d < 2 ? (1 << 30) : g.nz() - 1;
+      for (int a = 0; a < 3; ++a) {
+        const int idx = A.first + a;
+        const double delta = (idx + offset) - xc;
+        A.w[a] = idx >= lo && idx <= hi ? (centred ? bspline_hat(delta) : bspline_quadratic(delta)) : 0.0;
+      }
+    }
+  }
+  const Location where[3] = {Location::x_face, Location::y_face, Location::z_face};
+  for (int c = 0; c < 3; ++c) {
+    int cx, cy, cz;
+    pick(where[c], cx, cy, cz);
+    const Axis &x = ax[0][cx], &y = ax[1][cy], &z = ax[2][cz];
+    MlsStencil& s = out[static_cast<std::size_t>(c)];
+    set_indices(g, where[c], x, y, z, s);
+    for (int k = 0; k < 3; ++k)
+      for (int b = 0; b < 3; ++b)
+        for (int a = 0; a < 3; ++a) s.phi[a + 3 * b + 9 * k] = x.w[a] * y.w[b] * z.w[k];
+  }
+}
+
 MlsPoint mls_point(const grid::Grid& g, const Eigen::Vector3d& X, bool derivatives) {
   MlsPoint P;
   if (derivatives)

@@ -86,6 +86,22 @@ MlsStencil mls_stencil(const grid::Grid& g, grid::Location L, const Eigen::Vecto
 // shared (each direction has only two node offsets, face and centre). Same values as three
 // mls_stencil calls.
 void mls_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out);
+// The same three stencils with a divergence-free kernel instead of MLS (ours, after the composite
+// B-splines of Gruninger & Griffith 2025, J. Comput. Phys. 546:114472; the volume error it
+// addresses: Bao, Donev, Griffith, McQueen & Peskin 2017, J. Comput. Phys. 347:183): component c's
+// weight is the quadratic B-spline B₂ in its own direction (faces) and the hat B₁ in the other two
+// (centres), φ = B₂(δ_c) Π_{d≠c} B₁(δ_d), δ in cells. Since B₂'(x) = B₁(x + ½) − B₁(x − ½), the
+// interpolant U(X) = Σ φ_k u_k has ∇·U(X) = Σ_cells (D·u)_cell B₁B₁B₁(X − x_cell): zero wherever the
+// grid field is discretely divergence-free, so the flux of U through any closed surface vanishes
+// and a wall the forcing holds at U = V cannot lose the volume it encloses. Σφ = 1 and linear
+// fields are reproduced; the support is inside MLS's 3×3×3 block (same first node and centre
+// plane). Nodes outside the fluid (the z walls) get φ = 0, as with MLS: with markers kept ≥ Δz
+// from the walls only a wall face itself (where w = 0) can carry weight.
+void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out);
+// The quadratic B-spline and the hat (r in cells).
+double bspline_quadratic(double r);
+double bspline_hat(double r);
+
 // One point's 1-D weights in closed form for every staggered location (ours, round 3, for
 // cost): per direction d and node offset (0: faces normal to d, 1: centres), the support's
 // first node, ŵ_d(a), g_d(a) and (when asked) their derivatives ∂/∂X_d. mls_contract applies

@@ -13,7 +13,8 @@ namespace systole::ibm {
 
 using grid::Location;
 
-Transfer::Transfer(const grid::Slabs& slabs, const Markers& markers) : slabs_(slabs), markers_(markers) {
+Transfer::Transfer(const grid::Slabs& slabs, const Markers& markers, TransferKernel kernel)
+    : slabs_(slabs), markers_(markers), kernel_(kernel) {
   rebuild_all();
 }
 
@@ -109,7 +110,10 @@ void Transfer::rebuild_body(std::size_t body) {
     const std::size_t q = static_cast<std::size_t>(qq);
     if (flags[q] == 0) return;
     std::array<MlsStencil, 3> st;
-    mls_face_stencils(g, m.position[first + q], st);
+    if (kernel_ == TransferKernel::divergence_free)
+      divergence_free_face_stencils(g, m.position[first + q], st);
+    else
+      mls_face_stencils(g, m.position[first + q], st);
     for (int c = 0; c < 3; ++c) {
       const bool owner = (flags[q] >> (2 * c)) & 1, spreads = (flags[q] >> (2 * c + 1)) & 1;
       if (!(owner || spreads)) continue;

@@ -42,11 +42,15 @@ struct VelocityView {
 // CI case (5 334 markers) went from 8 s to 150 s wall with threads on every loop under load.
 inline constexpr std::ptrdiff_t kThreadedMarkers = 20000;
 
+// The markers' interpolation and spreading weights: the seed's MLS shape functions (eq 5), or
+// the divergence-free composite B-spline kernel (ours, mls.h divergence_free_face_stencils).
+enum class TransferKernel { mls, divergence_free };
+
 class Transfer {
  public:
   // Builds the stencils of `markers`' active markers that this rank needs. Collective: no
   // (purely local), but every rank must call rebuild() at the same points.
-  Transfer(const grid::Slabs& slabs, const Markers& markers);
+  Transfer(const grid::Slabs& slabs, const Markers& markers, TransferKernel kernel = TransferKernel::mls);
   // Rebuilds the stencils of the bodies that moved (or were switched on/off, or gained
   // markers); returns how many bodies were rebuilt. rebuild_all() ignores the check.
   int rebuild();
@@ -75,6 +79,7 @@ class Transfer {
 
   const Markers& markers() const { return markers_; }
   const grid::Slabs& slabs() const { return slabs_; }
+  TransferKernel kernel() const { return kernel_; }
   // Whether this rank owns the centre plane k (global) of a support.
   bool owns_plane(int k) const;
 
@@ -96,6 +101,7 @@ class Transfer {
   void spread_component(int c, const std::vector<Vec3>& F, grid::Field<L>& f) const;
   const grid::Slabs& slabs_;
   const Markers& markers_;
+  TransferKernel kernel_;
   std::vector<BodyEntries> entries_;
   // What the stencils were built from (to skip bodies that did not move).
   std::vector<Vec3> built_position_;

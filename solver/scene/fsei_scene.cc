@@ -258,7 +258,7 @@ const std::vector<std::string>& fsei_metric_names() {
       "lv_pressure_start_mmhg", "lv_pressure_max_mmhg", "la_pressure_max_mmhg", "aortic_root_pressure_max_mmhg",
       "lv_volume_start_ml", "lv_volume_min_ml", "lv_volume_end_ml", "la_volume_start_ml", "la_volume_end_ml",
       "aortic_flow_max_ml_s", "aortic_flow_min_ml_s", "mitral_flow_max_ml_s", "mitral_flow_min_ml_s",
-      "lv_volume_balance_ml", "lv_wall_slip_volume_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
+      "lv_volume_balance_ml", "lv_wall_slip_volume_ml", "valvular_plane_slip_volume_ml", "kinetic_energy_max_mj", "lv_twist_peak_deg", "lv_longitudinal_strain_min",
       "lv_circumferential_strain_min", "mitral_tip_velocity_max_m_s", "aortic_tip_velocity_max_m_s", "aortic_cusps_wss_max_pa", "simulated_time_ms", "fluid_steps", "structure_substeps",
       "ep_steps", "coupling_intervals", "coupling_passes", "coupling_unconverged_intervals",
       "coupling_max_final_residual", "max_step_over_limit", "grid_cells", "markers", "shell_nodes", "field_frames",
@@ -581,6 +581,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   forcing_parameters.carry_over_exclusion_cells = fs.forcing_carry_over_exclusion_cells;
   forcing_parameters.iterations = fs.forcing_iterations;
   forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
+  forcing_parameters.kernel =
+      fs.forcing_kernel == "divergence_free" ? ibm::TransferKernel::divergence_free : ibm::TransferKernel::mls;
   ibm::DirectForcing forcing(slabs, markers, forcing_parameters);
   coupling::FluidModuleOptions fmo;
   fmo.time_scale_ms = kTimeScaleMs;
@@ -807,7 +809,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   RunResult result;
   std::vector<double> t_ms, p_lv, p_la, p_ao, v_lv, v_la, q_ao, q_mi, ke;
   std::vector<double> twist, gls, gcs, u_mitral_tips, u_aortic_tips, wss_cusps;
-  std::vector<double> lv_wall_slip, aorta_wall_slip;
+  std::vector<double> lv_wall_slip, aorta_wall_slip, plane_slip;
   // Series added after a checkpoint's version (not in it) cannot be resumed: they are left out of
   // the result (and of later checkpoints) with a note, never filled in.
   bool wall_slip_series = true;
@@ -822,6 +824,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     throw std::logic_error("fsei: no marker body " + std::string(name));
   };
   const int lv_markers = marker_body_named(geometry::kLvBody), aorta_markers = marker_body_named(geometry::kAortaBody);
+  // The same through the rigid valvular plane (ours): −Σ (u(X_b) − V_b)·a A_b over its markers,
+  // a the LV's axis (base → apex), so positive from the LV side (the LV's cavity) towards the
+  // atrium's and the aortic root's side: the plane's share of the LV's leak.
+  const int plane_markers = marker_body_named(geometry::kValvularPlaneBody);
   // The wall shear stress (eq 27, extrapolated to the wall: ibm::wall_shear_stress) in Pa: per
   // marker the larger of the two sides' for leaflets; per shell node the area-weighted mean of
   // its tiles' values carried back by the tiling maps (ours). Collective.
@@ -885,15 +891,18 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       const fluid::Velocity& u = fluid.velocity();
       const std::vector<Vec3> ub = forcing.transfer().interpolate(ibm::ConstVelocityView{u.u, u.v, u.w});
       const ibm::MarkerArrays& ma = markers.markers();
-      double lv_out = 0, aorta_out = 0;
+      double lv_out = 0, aorta_out = 0, plane_out = 0;
       for (std::size_t mk = 0; mk < ma.size(); ++mk) {
-        if (!markers.active(mk) || (ma.body[mk] != lv_markers && ma.body[mk] != aorta_markers)) continue;
-        const double out = -(ub[mk] - ma.velocity[mk]).dot(ma.normal[mk]) * ma.area[mk];
-        (ma.body[mk] == lv_markers ? lv_out : aorta_out) += out;
+        if (!markers.active(mk)) continue;
+        const Vec3 slip = ub[mk] - ma.velocity[mk];
+        if (ma.body[mk] == lv_markers) lv_out -= slip.dot(ma.normal[mk]) * ma.area[mk];
+        else if (ma.body[mk] == aorta_markers) aorta_out -= slip.dot(ma.normal[mk]) * ma.area[mk];
+        else if (ma.body[mk] == plane_markers) plane_out -= slip.dot(heart.lv_axis_direction) * ma.area[mk];
       }
       if (wall_slip_series) {
         lv_wall_slip.push_back(lv_out * ml_s_per_unit);
         aorta_wall_slip.push_back(aorta_out * ml_s_per_unit);
+        plane_slip.push_back(plane_out * ml_s_per_unit);
       }
     }
     ke.push_back(fluid.diagnostics().kinetic_energy * kinetic_mj_per_unit);
@@ -920,7 +929,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     }
     for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
                      twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back(),
-                     wall_slip_series ? lv_wall_slip.back() : 0.0, wall_slip_series ? aorta_wall_slip.back() : 0.0})
+                     wall_slip_series ? lv_wall_slip.back() : 0.0, wall_slip_series ? aorta_wall_slip.back() : 0.0,
+                     wall_slip_series ? plane_slip.back() : 0.0})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
@@ -947,15 +957,16 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"ke", &ke},           {"twist", &twist}, {"gls", &gls},     {"gcs", &gcs},
       {"u_mitral_tips", &u_mitral_tips},        {"u_aortic_tips", &u_aortic_tips},
       {"wss_cusps", &wss_cusps},               {"lv_wall_slip", &lv_wall_slip},
-      {"aorta_wall_slip", &aorta_wall_slip}};
+      {"aorta_wall_slip", &aorta_wall_slip},   {"plane_slip", &plane_slip}};
   double t = 0;
   set_caps(0);
   if (resume_from) {
     t = resumed.scalar("scene/time_ms");
     const long samples = static_cast<long>(resumed.get("series/t_ms").size());
-    wall_slip_series = resumed.has("series/lv_wall_slip");
+    wall_slip_series = resumed.has("series/lv_wall_slip") && resumed.has("series/plane_slip");
     for (auto& [name, v] : series_state)
-      if (wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip)) *v = resumed.get("series/" + name, samples);
+      if (wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip && v != &plane_slip))
+        *v = resumed.get("series/" + name, samples);
     // (a checkpoint of an earlier version has no phase-average accumulators: they start here)
     wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
     if (wss_phase_from_ms == 0) wss_phase.import_state(resumed, "scene/wss_phase/");
@@ -1089,7 +1100,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         << p_ao.back() << " v_lv_ml " << v_lv.back() << " v_la_ml " << v_la.back() << " q_ao_ml_s " << q_ao.back()
         << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back();
       if (wall_slip_series)
-        m << " lv_slip_ml_s " << lv_wall_slip.back() << " aorta_slip_ml_s " << aorta_wall_slip.back();
+        m << " lv_slip_ml_s " << lv_wall_slip.back() << " aorta_slip_ml_s " << aorta_wall_slip.back() << " plane_slip_ml_s "
+          << plane_slip.back();
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();
         m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals
@@ -1150,9 +1162,14 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (std::size_t i = 1; i < t_ms.size(); ++i)
       slip_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (lv_wall_slip[i] + lv_wall_slip[i - 1]);
     M["lv_wall_slip_volume_ml"] = slip_ml;
+    double plane_ml = 0;  // the plane's share (out of the LV positive)
+    for (std::size_t i = 1; i < t_ms.size(); ++i)
+      plane_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (plane_slip[i] + plane_slip[i - 1]);
+    M["valvular_plane_slip_volume_ml"] = plane_ml;
   } else {
     result.notes.push_back("resumed from a checkpoint without the wall-slip series: lv_wall_slip_flux_ml_s, "
-                           "aorta_wall_slip_flux_ml_s and lv_wall_slip_volume_ml are not reported");
+                           "aorta_wall_slip_flux_ml_s, valvular_plane_slip_flux_ml_s, lv_wall_slip_volume_ml and "
+                           "valvular_plane_slip_volume_ml are not reported");
   }
   M["kinetic_energy_max_mj"] = max_of(ke);
   auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
@@ -1211,6 +1228,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (wall_slip_series) {
     add("lv_wall_slip_flux_ml_s", "ml/s", lv_wall_slip);
     add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
+    add("valvular_plane_slip_flux_ml_s", "ml/s", plane_slip);
   }
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   {

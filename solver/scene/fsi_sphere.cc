@@ -108,6 +108,7 @@ FsiSphereResult run_fsi_sphere(const FsiSphereOptions& o, MPI_Comm comm) {
   fpar.carry_over = o.carry_over;
   fpar.carry_over_factor = o.carry_over_factor;
   fpar.iterations = o.forcing_iterations;
+  fpar.kernel = o.divergence_free_kernel ? ibm::TransferKernel::divergence_free : ibm::TransferKernel::mls;
   ibm::DirectForcing forcing(slabs, markers, fpar);
   coupling::FluidModule fm(fluid, markers, forcing, coupling::FluidModuleOptions{});
   coupling::ShellModule sm(*shell);
@@ -156,10 +157,30 @@ FsiSphereResult run_fsi_sphere(const FsiSphereOptions& o, MPI_Comm comm) {
   so.mode = o.strong_coupling ? coupling::CouplingMode::strong : coupling::CouplingMode::loose;
   so.strong_max_iterations = o.strong_passes;
   coupling::Scheduler s(std::move(stages), so);
+  const double mm3_per_ms_per_unit = kDmMm * kDmMm * kUmMmPerMs;  // U d² in mm³/ms
+  auto out_fluxes = [&] {  // {slip, told}; collective
+    const fluid::Velocity& u = fluid.velocity();
+    const std::vector<Vec3> ub = forcing.transfer().interpolate(ibm::ConstVelocityView{u.u, u.v, u.w});
+    const ibm::MarkerArrays& ma = markers.markers();
+    double slip = 0, told = 0;
+    for (std::size_t mk = 0; mk < ma.size(); ++mk) {
+      slip -= (ub[mk] - ma.velocity[mk]).dot(ma.normal[mk]) * ma.area[mk];
+      told -= ma.velocity[mk].dot(ma.normal[mk]) * ma.area[mk];
+    }
+    return std::pair{slip * mm3_per_ms_per_unit, told * mm3_per_ms_per_unit};
+  };
   try {
+    double t_before = 0, slip_before = 0, told_before = 0;
     for (double t = o.sample_ms; t <= o.end_ms * (1 + 1e-12); t += o.sample_ms) {
       s.advance_to(t);
       const double ratio = shell->cavity_volume_mm3() / res.initial_volume_mm3;
+      const auto [slip, told] = out_fluxes();
+      res.slip_volume_mm3 += 0.5 * (t - t_before) * (slip + slip_before);
+      res.told_volume_mm3 += 0.5 * (t - t_before) * (told + told_before);
+      t_before = t;
+      slip_before = slip;
+      told_before = told;
+      res.slip_out_mm3_per_ms.push_back(slip);
       res.time_ms.push_back(t);
       res.volume_ratio.push_back(ratio);
       res.min_volume_ratio = std::min(res.min_volume_ratio, ratio);

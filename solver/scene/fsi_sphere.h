@@ -29,6 +29,7 @@ struct FsiSphereOptions {
   bool carry_over = true;           // ibm::ForcingParameters::carry_over (false: the seed's forcing)
   double carry_over_factor = 1;     // ibm::ForcingParameters::carry_over_factor
   int forcing_iterations = 1;       // ibm::ForcingParameters::iterations
+  bool divergence_free_kernel = false;  // ibm::TransferKernel::divergence_free (false: MLS)
   double marker_retraction_cells = 0;
   double marker_spacing_fraction = 0.7;
   bool strong_coupling = false;     // false: loose (the seed's production runs)
@@ -42,6 +43,15 @@ struct FsiSphereOptions {
 struct FsiSphereResult {
   double initial_volume_mm3 = 0;
   std::vector<double> time_ms, volume_ratio;  // samples of V / V0
+  // The blood's flux through the markers relative to them at each sample, −Σ (u(X) − V)·n A
+  // (out of the sphere positive, mm³/ms), and its trapezoidal integral from t = 0 (where it is 0,
+  // at rest) over the samples, mm³: the leak seen at the markers, to compare with the volume
+  // lost (ours; the heart's lv_wall_slip_flux_ml_s). Sample finely (sample_ms) for the integral.
+  std::vector<double> slip_out_mm3_per_ms;
+  double slip_volume_mm3 = 0;
+  // The same integral of the markers' own velocities, −Σ V·n A (out positive): the volume the
+  // fluid was told the wall sweeps, against the shell's true volume change.
+  double told_volume_mm3 = 0;
   double min_volume_ratio = 1, max_volume_ratio = 1;
   long long fluid_steps = 0, shell_substeps = 0, passes = 0, unconverged_intervals = 0;
   double max_step_over_limit = 0;       // over both modules

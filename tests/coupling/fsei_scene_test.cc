@@ -357,13 +357,19 @@ TEST(FseiScene, TheFirst70MsContractIsovolumically) {
               leak_per_mmhg);
   EXPECT_GT(leak_ml, 0.0);  // the sign of the defect: blood leaves through the walls
   EXPECT_LT(leak_per_mmhg, 8.0);
-  // Seen at the LV's own markers (the slip left after each step, out positive): part of the
-  // leak, the rest crossing the valvular plane (docs/fsei.md, session 13: 0.43 of 0.81 ml over 45 ms, 1.29 of 2.47 over 70).
+  // Seen at the LV's own markers and at the valvular plane's (the slip left after each step, out
+  // of the LV positive): most of the leak, the LV's markers the larger part (docs/fsei.md,
+  // session 13: 1.29 of 2.47 ml at the LV's markers over 70 ms; session 14: the plane's 0.10-0.25
+  // ml per 25 ms against the LV markers' 0.34-0.83 with bending and the area floor).
   const double slip_ml = r.metrics.at("lv_wall_slip_volume_ml"), lost_ml = -r.metrics.at("lv_volume_balance_ml");
-  std::printf("  [measured] 0-70 ms: LV lost %.3f ml beyond its orifices, %.3f ml of it through its own markers\n", lost_ml,
-              slip_ml);
+  const double plane_ml = r.metrics.at("valvular_plane_slip_volume_ml");
+  std::printf("  [measured] 0-70 ms: LV lost %.3f ml beyond its orifices, %.3f ml of it through its own markers, %.3f ml "
+              "through the valvular plane's\n",
+              lost_ml, slip_ml, plane_ml);
   EXPECT_GT(slip_ml, 0.0);
-  EXPECT_LT(slip_ml, lost_ml);
+  EXPECT_GT(plane_ml, 0.0);
+  EXPECT_GT(slip_ml, plane_ml);
+  EXPECT_LT(slip_ml + plane_ml, lost_ml);
 }
 
 TEST(FseiScene, AortaStartsAtItsGroundPressure) {

@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Run time against error for scene fsi/fsei over a common window (issue #9, docs/benchmarks.md).
+
+usage: fsei_resolution_study.py OUT.png LABEL:RESULT_DIR:TIME_LOG:RANKS [...]
+
+Each run is a `fsei_case ... out=RESULT_DIR` of the same scenario at another grid, timed by
+`/usr/bin/time -v` into TIME_LOG (its "Elapsed (wall clock) time" and "Maximum resident set
+size" lines), on RANKS MPI ranks. The last run given is the reference (the finest grid). Over the
+window all runs reached, it prints a Markdown table of the quantities below, their relative
+difference from the reference, and the cost (wall time, CPU-hours per beat extrapolated from the
+window at the scenario's heart rate, peak memory), and draws the differences against CPU-hours
+per beat into OUT.png. Only Debian's python3 and python3-matplotlib are needed.
+
+Quantities (all read from time_series.csv and metrics.json):
+  - LV peak pressure (mmHg) and aortic-root pressure at the window's end (mmHg);
+  - the aortic valve's peak flow (ml/s) and the volume ejected through it (ml);
+  - the velocity probe: the largest mean velocity over the disk at the closed cusps' tips (m/s);
+  - the LV's leak over 20-70 ms (isovolumic): orifice flows integrated minus the volume change,
+    per mean LV pressure (ml/s per mmHg): the immersed boundary's error itself.
+"""
+import csv
+import json
+import math
+import os
+import re
+import sys
+
+
+def read_series(result_dir):
+    with open(os.path.join(result_dir, "time_series.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return {k: [float(r[k]) for r in rows] for k in rows[0]}
+
+
+def read_time_log(path):
+    wall_s, rss_gb = float("nan"), float("nan")
+    with open(path) as f:
+        for line in f:
+            m = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", line)
+            if m:
+                parts = [float(p) for p in m.group(1).split(":")]
+                wall_s = sum(p * 60 ** (len(parts) - 1 - i) for i, p in enumerate(parts))
+            m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", line)
+            if m:
+                rss_gb = int(m.group(1)) / 1024 ** 2
+    if math.isnan(wall_s):
+        sys.exit(f"{path}: no '/usr/bin/time -v' wall-clock line (was the run timed, and did it finish?)")
+    return wall_s, rss_gb
+
+
+def integrate(t_s, y, t0, t1):
+    total = 0.0
+    for i in range(1, len(t_s)):
+        a, b = max(t_s[i - 1], t0), min(t_s[i], t1)
+        if b <= a:
+            continue
+        f = lambda t: y[i - 1] + (y[i] - y[i - 1]) * (t - t_s[i - 1]) / (t_s[i] - t_s[i - 1])
+        total += 0.5 * (b - a) * (f(a) + f(b))
+    return total
+
+
+def at(t_s, y, t):
+    for i in range(1, len(t_s)):
+        if t_s[i] >= t - 1e-12:
+            w = (t - t_s[i - 1]) / (t_s[i] - t_s[i - 1])
+            return y[i - 1] + w * (y[i] - y[i - 1])
+    return y[-1]
+
+
+def quantities(s, t_end):
+    t = s["time_s"]
+    keep = [i for i, x in enumerate(t) if x <= t_end + 1e-9]
+    clip = lambda k: [s[k][i] for i in keep]
+    lost = (integrate(t, s["mitral_flow_ml_s"], 0.02, 0.07) - integrate(t, s["aortic_flow_ml_s"], 0.02, 0.07)) - (
+        at(t, s["lv_volume_ml"], 0.07) - at(t, s["lv_volume_ml"], 0.02))
+    p_mean = integrate(t, s["lv_pressure_mmhg"], 0.02, 0.07) / 0.05
+    return {
+        "LV peak pressure (mmHg)": max(clip("lv_pressure_mmhg")),
+        "root pressure at end (mmHg)": at(t, s["aortic_root_pressure_mmhg"], t_end),
+        "aortic peak flow (ml/s)": max(clip("aortic_flow_ml_s")),
+        "ejected volume (ml)": integrate(t, [max(q, 0.0) for q in s["aortic_flow_ml_s"]], 0.0, t_end),
+        "cusp-tip velocity max (m/s)": max(clip("aortic_tip_velocity_m_s")),
+        "LV leak 20-70 ms (ml/s per mmHg)": lost / 0.05 / p_mean,
+    }
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    out_png = sys.argv[1]
+    runs = []
+    for spec in sys.argv[2:]:
+        parts = spec.split(":")
+        if len(parts) != 4:
+            sys.exit(f"run '{spec}': expected LABEL:RESULT_DIR:TIME_LOG:RANKS")
+        label, result_dir, time_log, ranks = parts
+        with open(os.path.join(result_dir, "metrics.json")) as f:
+            metrics = json.load(f)
+        metrics = metrics.get("metrics", metrics)
+        wall_s, rss_gb = read_time_log(time_log)
+        runs.append(dict(label=label, series=read_series(result_dir), metrics=metrics, wall_s=wall_s, rss_gb=rss_gb,
+                         ranks=int(ranks)))
+    t_end = min(r["series"]["time_s"][-1] for r in runs)
+    if t_end < 0.07:
+        sys.exit(f"the common window ends at {1e3 * t_end:.1f} ms: the leak needs 70 ms")
+    for r in runs:
+        r["q"] = quantities(r["series"], t_end)
+        beat_s = 60.0 / r["metrics"]["heart_rate_bpm"]
+        r["cpu_h_per_beat"] = r["wall_s"] * r["ranks"] * (beat_s / r["metrics"]["simulated_time_ms"] * 1e3) / 3600
+    ref = runs[-1]
+    names = list(ref["q"])
+    print(f"window 0-{1e3 * t_end:.0f} ms; reference: {ref['label']}\n")
+    print("| run | grid cells | markers | ranks | wall (min) | CPU-h per beat (extrapolated) | peak memory (GB) | "
+          + " | ".join(names) + " |")
+    print("|" + "---|" * (7 + len(names)))
+    for r in runs:
+        cells = []
+        for n in names:
+            v = r["q"][n]
+            cell = f"{v:.4g}"
+            if r is not ref and ref["q"][n] != 0:
+                cell += f" ({100 * (v - ref['q'][n]) / abs(ref['q'][n]):+.1f} %)"
+            cells.append(cell)
+        print(f"| {r['label']} | {int(r['metrics']['grid_cells'])} | {int(r['metrics']['markers'])} | {r['ranks']} | "
+              f"{r['wall_s'] / 60:.1f} | {r['cpu_h_per_beat']:.2f} | {r['rss_gb']:.2f} | " + " | ".join(cells) + " |")
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for n in names:
+        xs = [r["cpu_h_per_beat"] for r in runs[:-1]]
+        ys = [max(1e-4, abs(r["q"][n] - ref["q"][n]) / abs(ref["q"][n])) for r in runs[:-1]]
+        ax.loglog(xs, ys, "o-", label=n)
+    ax.axvline(1500, color="k", ls="--")
+    ax.text(1500, 1.2e-4, " seed: 1500 CPU-h", rotation=90, va="bottom")
+    ax.axvspan(3, 10, color="0.85")
+    ax.text(3.2, 1.2e-4, "FSEI-GPU 3-10 GPU-h", rotation=90, va="bottom", fontsize=8)
+    ax.set_xlabel("CPU-hours per beat (extrapolated from the window)")
+    ax.set_ylabel(f"|difference| from {ref['label']} (relative)")
+    ax.set_title(f"scene fsi: run time against error, 0-{1e3 * t_end:.0f} ms of the beat")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out_png, dpi=110)
+    print(f"\nwrote {out_png}")
+
+
+if __name__ == "__main__":
+    main()
