@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Run time against error for scene fsi/fsei over a common window (issue #9, docs/benchmarks.md).
 
 usage: fsei_resolution_study.py OUT.png LABEL:RESULT_DIR:TIME_LOG:RANKS [...]
