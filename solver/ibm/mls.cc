@@ -210,6 +210,9 @@ void mls_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array
   }
 }
 
+namespace {
+
+// The quadratic B-spline B₂ and the hat B₁ (r in cells).
 double bspline_quadratic(double r) {
   r = std::abs(r);
   if (r <= 0.5) return 0.75 - r * r;
@@ -221,6 +224,8 @@ double bspline_hat(double r) {
   r = std::abs(r);
   return r < 1 ? 1 - r : 0;
 }
+
+}  // namespace
 
 void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out) {
   // The six axes [direction][0: faces (B₂), 1: centres (B₁)], on the same blocks as MLS.

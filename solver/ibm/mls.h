@@ -98,9 +98,6 @@ void mls_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array
 // plane). Nodes outside the fluid (the z walls) get φ = 0, as with MLS: with markers kept ≥ Δz
 // from the walls only a wall face itself (where w = 0) can carry weight.
 void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out);
-// The quadratic B-spline and the hat (r in cells).
-double bspline_quadratic(double r);
-double bspline_hat(double r);
 
 // One point's 1-D weights in closed form for every staggered location (ours, round 3, for
 // cost): per direction d and node offset (0: faces normal to d, 1: centres), the support's
