@@ -1149,23 +1149,20 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["aortic_flow_min_ml_s"] = min_of(q_ao);
   M["mitral_flow_max_ml_s"] = max_of(q_mi);
   M["mitral_flow_min_ml_s"] = min_of(q_mi);
-  // What the LV lost beyond what left through its orifices (trapezoidal ∫ over the samples):
-  // the leak of the immersed boundary across the wall and the closed leaflets (ours).
-  double through_ml = 0;
-  for (std::size_t i = 1; i < t_ms.size(); ++i)
-    through_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * ((q_ao[i] - q_mi[i]) + (q_ao[i - 1] - q_mi[i - 1]));
-  M["lv_volume_balance_ml"] = (v_lv.back() - v_lv.front()) + through_ml;
-  // The same leak seen at the LV's markers (out positive): −lv_volume_balance_ml when the slip at
-  // the markers is the whole leak.
+  // The volume a flow series (ml/s) carried over the run: the trapezoidal ∫ over the samples.
+  auto volume_ml = [&](const std::vector<double>& q_ml_s) {
+    double ml = 0;
+    for (std::size_t i = 1; i < t_ms.size(); ++i) ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (q_ml_s[i] + q_ml_s[i - 1]);
+    return ml;
+  };
+  // What the LV lost beyond what left through its orifices: the leak of the immersed boundary
+  // across the wall and the closed leaflets (ours).
+  M["lv_volume_balance_ml"] = (v_lv.back() - v_lv.front()) + volume_ml(q_ao) - volume_ml(q_mi);
+  // The same leak seen at the LV's markers and at the plane's (out of the LV positive): together
+  // −lv_volume_balance_ml when the slip at the markers is the whole leak.
   if (wall_slip_series) {
-    double slip_ml = 0;
-    for (std::size_t i = 1; i < t_ms.size(); ++i)
-      slip_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (lv_wall_slip[i] + lv_wall_slip[i - 1]);
-    M["lv_wall_slip_volume_ml"] = slip_ml;
-    double plane_ml = 0;  // the plane's share (out of the LV positive)
-    for (std::size_t i = 1; i < t_ms.size(); ++i)
-      plane_ml += 0.5 * 1e-3 * (t_ms[i] - t_ms[i - 1]) * (plane_slip[i] + plane_slip[i - 1]);
-    M["valvular_plane_slip_volume_ml"] = plane_ml;
+    M["lv_wall_slip_volume_ml"] = volume_ml(lv_wall_slip);
+    M["valvular_plane_slip_volume_ml"] = volume_ml(plane_slip);
   } else {
     result.notes.push_back("resumed from a checkpoint without the wall-slip series: lv_wall_slip_flux_ml_s, "
                            "aorta_wall_slip_flux_ml_s, valvular_plane_slip_flux_ml_s, lv_wall_slip_volume_ml and "

@@ -180,7 +180,6 @@ FsiSphereResult run_fsi_sphere(const FsiSphereOptions& o, MPI_Comm comm) {
       t_before = t;
       slip_before = slip;
       told_before = told;
-      res.slip_out_mm3_per_ms.push_back(slip);
       res.time_ms.push_back(t);
       res.volume_ratio.push_back(ratio);
       res.min_volume_ratio = std::min(res.min_volume_ratio, ratio);

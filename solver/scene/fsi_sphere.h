@@ -43,11 +43,10 @@ struct FsiSphereOptions {
 struct FsiSphereResult {
   double initial_volume_mm3 = 0;
   std::vector<double> time_ms, volume_ratio;  // samples of V / V0
-  // The blood's flux through the markers relative to them at each sample, −Σ (u(X) − V)·n A
-  // (out of the sphere positive, mm³/ms), and its trapezoidal integral from t = 0 (where it is 0,
-  // at rest) over the samples, mm³: the leak seen at the markers, to compare with the volume
-  // lost (ours; the heart's lv_wall_slip_flux_ml_s). Sample finely (sample_ms) for the integral.
-  std::vector<double> slip_out_mm3_per_ms;
+  // The blood's flux through the markers relative to them, −Σ (u(X) − V)·n A (out of the sphere
+  // positive), integrated by the trapezoid rule over the samples from t = 0 (where it is 0, at
+  // rest), mm³: the leak seen at the markers, to compare with the volume lost (ours; the heart's
+  // lv_wall_slip_flux_ml_s). Sample finely (sample_ms) for the integral.
   double slip_volume_mm3 = 0;
   // The same integral of the markers' own velocities, −Σ V·n A (out positive): the volume the
   // fluid was told the wall sweeps, against the shell's true volume change.
