@@ -27,9 +27,14 @@ std::string exact(double v) {
 }
 
 // Parameters a continued run may change: they do not enter the trajectory.
+// What a continued run may change: the outputs, the run's length, the field and checkpoint
+// intervals, and the structure's strain limit (a guard that stops the run, not a parameter of the
+// trajectory: the pre-stress does not depend on it either, prestress.h), so a run stopped by it
+// resumes from its last checkpoint with a looser one.
 bool excluded(std::string_view path) {
   return path.rfind("outputs.", 0) == 0 || path == "beats" || path == "fsei.end_time_ms" ||
-         path == "fsei.field_interval_ms" || path == "fsei.checkpoint_interval_ms";
+         path == "fsei.field_interval_ms" || path == "fsei.checkpoint_interval_ms" ||
+         path == "structure.strain_limit";
 }
 
 std::string entry_name(std::size_t k) { return std::string("e").append(std::to_string(k)); }
@@ -203,13 +208,16 @@ StateArchive read_state_file(const fs::path& file, std::string& fingerprint) {
 
 void check_fingerprint(const fs::path& checkpoint, const std::string& stored, const std::string& current) {
   if (stored == current) return;
+  // A checkpoint written before a parameter was excluded still carries its line: skip it.
   auto lines = [](const std::string& s) {
     std::vector<std::string> out;
     std::istringstream in(s);
-    for (std::string l; std::getline(in, l);) out.push_back(l);
+    for (std::string l; std::getline(in, l);)
+      if (!excluded(std::string_view(l).substr(0, l.find('=')))) out.push_back(l);
     return out;
   };
   const auto a = lines(stored), b = lines(current);
+  if (a == b) return;
   std::string there = "(nothing)", here = "(nothing)";
   for (std::size_t i = 0; i < std::max(a.size(), b.size()); ++i) {
     const std::string x = i < a.size() ? a[i] : "", y = i < b.size() ? b[i] : "";

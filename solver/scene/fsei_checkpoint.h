@@ -20,8 +20,9 @@
 namespace systole::scene {
 
 // The scenario's parameters that decide the trajectory, one "path=value" line each (every
-// parameter of the table except the outputs, the run's length and the field and checkpoint
-// intervals, which a continued run may change). Reals with 17 significant digits.
+// parameter of the table except the outputs, the run's length, the field and checkpoint
+// intervals and the strain limit (a guard), which a continued run may change). Reals with 17
+// significant digits.
 std::string scenario_fingerprint(const config::Scenario& scenario);
 
 class CheckpointDirectory {

@@ -226,7 +226,10 @@ Prestress membrane_prestress(const ShellModel& model, const std::vector<Vec3>& l
       continue;
     }
     if (tau_needed[e] < 0) ++out.compressed_springs;
-    double lo = tau_needed[e] > 0 ? 0 : -so.strain_limit, hi = tau_needed[e] > 0 ? so.strain_limit : 0;
+    // Bisection on [0, 1) ([-1, 0]), not on the strain limit's bracket: the check above puts
+    // the root inside the limit, and the rest lengths do not depend on the limit (a guard; a run
+    // stopped by it resumes from its checkpoint with a looser one, fsei_checkpoint.h).
+    double lo = tau_needed[e] > 0 ? 0 : -1, hi = tau_needed[e] > 0 ? 1 : 0;
     for (int it = 0; it < 200 && hi - lo > 1e-15; ++it) {
       const double mid = 0.5 * (lo + hi);
       (law.stress(mid, s.c_kpa, s.alpha, lp) < tau_needed[e] ? lo : hi) = mid;

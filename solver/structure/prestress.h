@@ -24,10 +24,10 @@
 //    strains of -19 ... +48 %; a small smoothing (1e-9) gives the exact equilibrium (docs/fsei.md,
 //    tests/structure/prestress_test.cc);
 //  - each F_e becomes a rest length by inverting the spring law at the current length:
-//    tau(eps) C / l = F, eps = 1 - l0/l, by bisection on [0, strain_limit] ([-strain_limit, 0]
-//    for a compressive F: an obtuse triangle's long edge carries compression even in isotropic
-//    tension); a force beyond the law's stress at the strain limit throws InputError naming the
-//    body, the worst spring and how many;
+//    tau(eps) C / l = F, eps = 1 - l0/l, by bisection on [0, 1) ([-1, 0] for a compressive F: an
+//    obtuse triangle's long edge carries compression even in isotropic tension); a force beyond
+//    the law's stress at the strain limit throws InputError naming the body, the worst spring and
+//    how many; below it the rest lengths do not depend on the limit (bitwise);
 //  - bending hinges are not touched: at the stress-free positions they exert no force;
 //  - residual_relative is |sum of the realised spring forces + load| over the free nodes,
 //    relative to |load|: what the pre-stressed model will see at t = 0 (bending aside).

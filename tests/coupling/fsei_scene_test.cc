@@ -17,6 +17,7 @@
 #include "solver/core/errors.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/diagnostics/phase_average.h"
+#include "solver/scene/fsei_checkpoint.h"
 #include "solver/scene/fsei_fields.h"
 #include "solver/scene/fsei_scene.h"
 #include "solver/structure/shapes.h"
@@ -660,11 +661,13 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   EXPECT_NEAR(longer.metrics.at("resumed_from_ms"), 0.1, 1e-9);
   EXPECT_NEAR(longer.metrics.at("simulated_time_ms"), 0.3, 1e-9);
   EXPECT_EQ(longer.series.front().values.size(), 4u);  // 0, 0.1 (from the checkpoint), 0.2, 0.3 ms
-  // resumed (at 0.2 ms) with field frames the earlier attempts did not write (the interval is not
-  // part of the fingerprint): the frames start after the checkpoint, 0.25 … 0.4 ms
+  // resumed (at 0.2 ms) with field frames the earlier attempts did not write and a looser strain
+  // limit (neither is part of the fingerprint: a run stopped by the guard resumes with another):
+  // the frames start after the checkpoint, 0.25 … 0.4 ms
   const auto out = fresh_directory("checkpoint_fields");
   {
     nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.4}, {"checkpoint_interval_ms", 0.1}, {"field_interval_ms", 0.05}}},
+                          {"structure", {{"strain_limit", 0.75}}},
                           {"outputs", {{"time_series_interval_ms", 0.1}}}};
     ToDirectory control(out, dir);
     const RunResult with_fields = run_fsei(scenario("fsi", doc), control);
@@ -674,6 +677,21 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   }
   std::filesystem::remove_all(out);
   std::filesystem::remove_all(dir);
+}
+
+// A checkpoint written while the strain limit was still part of the fingerprint (before session
+// 15) carries its line; a parameter no longer fingerprinted is skipped, the others still count.
+TEST(FseiScene, ACheckpointsFingerprintSkipsParametersNoLongerFingerprinted) {
+  const std::string current = scenario_fingerprint(scenario("fsi", nlohmann::json::object()));
+  ASSERT_EQ(current.find("structure.strain_limit="), std::string::npos);
+  const std::size_t at = current.find("structure.");
+  ASSERT_NE(at, std::string::npos);
+  std::string older = current;
+  older.insert(at, "structure.strain_limit=0.59999999999999998\n");
+  EXPECT_NO_THROW(check_fingerprint("old", older, current));
+  std::string other = older;
+  other.replace(other.find("fluid.cfl="), std::string("fluid.cfl=").size(), "fluid.cfl=9");
+  EXPECT_THROW(check_fingerprint("old", other, current), InputError);
 }
 
 }  // namespace

@@ -6,7 +6,8 @@
 //   and the edge forces to those of the isotropic tension p R / 2 in the r.m.s. at first order;
 //   the pre-stressed sphere then stays at its built shape when released under that pressure;
 // - a flat sheet cannot carry a normal load by tension: the residual says so, no silent result;
-// - a load beyond what the tissue carries at the strain limit is an InputError naming the body.
+// - a load beyond what the tissue carries at the strain limit is an InputError naming the body;
+//   below it the rest lengths do not depend on the limit (a guard), bitwise.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -179,6 +180,26 @@ TEST(Prestress, ALoadBeyondTheStrainLimitIsAnInputErrorNamingTheBody) {
     EXPECT_NE(m.find("body '"), std::string::npos) << m;
     EXPECT_NE(m.find("strain limit"), std::string::npos) << m;
   }
+}
+
+// The strain limit is a guard, not a parameter of the pre-stress: raising it leaves every rest
+// length bitwise the same (a run stopped by the guard resumes from its checkpoint with a looser
+// one, solver/scene/fsei_checkpoint.h), as long as the needed strains are within both limits.
+TEST(Prestress, TheRestLengthsDoNotDependOnTheStrainLimit) {
+  std::vector<double> rest[2];
+  double max_strain = 0;
+  for (int k = 0; k < 2; ++k) {
+    ShellOptions opt;
+    opt.strain_limit = k == 0 ? 0.6 : 0.9;
+    ShellModel body(icosphere(12, 3, 2, Tissue::kAorticWall, false), aorta_like_materials(), opt);
+    const Prestress ps =
+        membrane_prestress(body, pressure_nodal_forces(body.stress_free_mesh(), body.positions_mm(), -8.0));
+    rest[k] = ps.rest_length_mm;
+    max_strain = ps.max_strain;
+  }
+  EXPECT_GT(max_strain, 0.05);  // the springs are pre-stretched, not left at their lengths
+  ASSERT_EQ(rest[0].size(), rest[1].size());
+  for (std::size_t e = 0; e < rest[0].size(); ++e) ASSERT_EQ(rest[0][e], rest[1][e]) << "spring " << e;
 }
 
 }  // namespace
