@@ -5,6 +5,8 @@
 // interpolation, spreading, one direct-forcing pass (interpolate + spread), loads (probes with
 // MLS gradients, eq 11–14, 27). One rank, OMP_NUM_THREADS threads; best of `repeats` timings, wall and
 // CPU (user + system of the process) side by side. Usage: ibm_cost_bench [repeats=3] [grids=2]
+// [kernel=mls|divergence_free] (the transfer's weights, transfer.h: MLS's 27 per marker and
+// component, or the divergence-free kernel's three 1-D factors)
 #include <mpi.h>
 
 #include <sys/resource.h>
@@ -13,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <string>
 
 #include "solver/config/scenario.h"
 #include "solver/geometry/left_heart.h"
@@ -47,6 +50,14 @@ int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   const int repeats = argc > 1 ? std::atoi(argv[1]) : 3;
   const int grids = argc > 2 ? std::atoi(argv[2]) : 2;
+  const std::string kernel_name = argc > 3 ? argv[3] : "mls";
+  if (kernel_name != "mls" && kernel_name != "divergence_free") {
+    std::fprintf(stderr, "ibm_cost_bench: kernel = \"%s\": use mls or divergence_free\n", kernel_name.c_str());
+    MPI_Finalize();
+    return 2;
+  }
+  ibm::ForcingParameters forcing_parameters;
+  forcing_parameters.kernel = kernel_name == "mls" ? ibm::TransferKernel::mls : ibm::TransferKernel::divergence_free;
   const config::Scenario sc = config::default_scenario();
   const geometry::LeftHeart heart = geometry::build_left_heart(sc.geometry, sc.fluid);
   const double unit_mm = 24.0;  // d_m
@@ -72,7 +83,7 @@ int main(int argc, char** argv) {
     v.fill(-0.1);
     w.fill(0.2);
     p.fill(1.0);
-    ibm::DirectForcing forcing(slabs, markers, {});
+    ibm::DirectForcing forcing(slabs, markers, forcing_parameters);
     const double n = static_cast<double>(markers.size());
     std::vector<ibm::Vec3> F(markers.size(), ibm::Vec3(1, 2, 3));
     ibm::Transfer& t = const_cast<ibm::Transfer&>(forcing.transfer());
@@ -84,6 +95,13 @@ int main(int argc, char** argv) {
     const Timing spread = best_seconds(repeats, [&] { t.spread(F, {fu, fv, fw}); });
     const Timing apply = best_seconds(repeats, [&] { forcing.apply(0.01, {u, v, w}, {fu, fv, fw}); });
     const Timing loads = best_seconds(repeats, [&] { (void)ibm::compute_loads(t, {u, v, w}, p, 3000); });
+    // The carry-over's anti-windup mask (2 h, the heart's tight setting) after the markers moved:
+    // markers_moved() on unmoved markers is the mask plus the rebuild's unmoved check.
+    ibm::ForcingParameters carry = forcing_parameters;
+    carry.carry_over = true;
+    carry.carry_over_exclusion_cells = 2;
+    ibm::DirectForcing carrying(slabs, markers, carry);
+    const Timing mask = best_seconds(repeats, [&] { carrying.markers_moved(); });
     // The loads' probes alone (MLS pressure and velocity gradient at X + h n, and X − h n for the
     // leaflets): the rest of "loads + WSS" is eq 11/12/14, the nodal forces and the WSS (eq 27).
     std::vector<ibm::Vec3> points;
@@ -96,8 +114,8 @@ int main(int argc, char** argv) {
       }
     }
     const Timing probes = best_seconds(repeats, [&] { (void)ibm::probe(t, {u, v, w}, p, points); });
-    std::printf("%s (%d x %d x %d cells, h = %.4f mm): %zu markers in %zu bodies\n", gs.name, gs.nx, gs.ny, gs.nz,
-                markers.h() * unit_mm, markers.size(), markers.bodies().size());
+    std::printf("%s (%d x %d x %d cells, h = %.4f mm), kernel %s: %zu markers in %zu bodies\n", gs.name, gs.nx, gs.ny,
+                gs.nz, markers.h() * unit_mm, kernel_name.c_str(), markers.size(), markers.bodies().size());
     for (const auto& b : markers.bodies())
       std::printf("   %-18s tiling level %d, %zu markers\n", b.name.c_str(), b.tiling_level, b.marker_count);
     auto line = [&](const char* what, const Timing& t) {
@@ -110,6 +128,8 @@ int main(int argc, char** argv) {
     line("spreading", spread);
     line("forcing pass", apply);
     line("loads + WSS", loads);
+    line("carry-over mask", mask);
+    std::printf("    (2 h exclusion: %zu markers excluded)\n", carrying.carry_over_excluded());
     std::printf("    of which probes   wall %9.3f ms (%zu probes) | cpu %9.3f ms; eq 11-14 + nodal forces + WSS: cpu %.3f ms\n",
                 1e3 * probes.wall, points.size(), 1e3 * probes.cpu, 1e3 * (loads.cpu - probes.cpu));
     std::printf("  IB stage (rebuild + forcing + loads) wall %8.3f ms, cpu %8.3f ms per step\n",

@@ -75,10 +75,30 @@ void DirectForcing::update_carry_mask() {
   for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
   std::vector<std::size_t> fill(start.begin(), start.end() - 1);
   for (std::size_t b = 0; b < n; ++b) order[fill[cell_of[b]]++] = b;
+  // Per cell: the one body its markers belong to, kMixed, or kEmpty (ours, for cost: most
+  // markers see only their own body in the 27 cells around them and need no distance test).
+  constexpr std::int32_t kEmpty = -1, kMixed = -2;
+  std::vector<std::int32_t> cell_body(cells, kEmpty);
+  for (std::size_t b = 0; b < n; ++b) {
+    std::int32_t& t = cell_body[cell_of[b]];
+    const std::int32_t body = m.body[b];
+    t = t == kEmpty || t == body ? body : kMixed;
+  }
   carries_.assign(n, 1);
   for (std::size_t b = 0; b < n; ++b) {
     const Vec3& x = m.position[b];
     const int ci = coord(x.x(), 0), cj = coord(x.y(), 1), ck = coord(x.z(), 2);
+    bool others_around = false;
+    for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !others_around; ++k)
+      for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !others_around; ++j)
+        for (int i = std::max(ci - 1, 0); i <= std::min(ci + 1, dims[0] - 1); ++i) {
+          const std::int32_t t = cell_body[index(i, j, k)];
+          if (t != kEmpty && t != m.body[b]) {
+            others_around = true;
+            break;
+          }
+        }
+    if (!others_around) continue;
     bool near_other = false;
     for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)
       for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !near_other; ++j)

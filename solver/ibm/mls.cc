@@ -120,7 +120,9 @@ void axes(const grid::Grid& g, const Eigen::Vector3d& X, Axis out[3][2]) {
 
 int wrap(int i, int n) { return ((i % n) + n) % n; }
 
-void set_indices(const grid::Grid& g, Location L, const Axis& x, const Axis& y, const Axis& z, MlsStencil& s) {
+// The support's first node, centre plane and in-fluid planes (MlsStencil or TensorStencil).
+template <class Stencil>
+void set_indices(const grid::Grid& g, Location L, const Axis& x, const Axis& y, const Axis& z, Stencil& s) {
   s.i0 = wrap(x.first, g.nx());
   s.j0 = wrap(y.first, g.ny());
   s.k0 = z.first;
@@ -227,7 +229,7 @@ double bspline_hat(double r) {
 
 }  // namespace
 
-void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out) {
+void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<TensorStencil, 3>& out) {
   // The six axes [direction][0: faces (B₂), 1: centres (B₁)], on the same blocks as MLS.
   Axis ax[3][2];
   const double spacing[3] = {g.dx(), g.dy(), g.dz()};
@@ -250,11 +252,31 @@ void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X
     int cx, cy, cz;
     pick(where[c], cx, cy, cz);
     const Axis &x = ax[0][cx], &y = ax[1][cy], &z = ax[2][cz];
-    MlsStencil& s = out[static_cast<std::size_t>(c)];
-    set_indices(g, where[c], x, y, z, s);
-    for (int k = 0; k < 3; ++k)
-      for (int b = 0; b < 3; ++b)
-        for (int a = 0; a < 3; ++a) s.phi[a + 3 * b + 9 * k] = x.w[a] * y.w[b] * z.w[k];
+    TensorStencil& t = out[static_cast<std::size_t>(c)];
+    set_indices(g, where[c], x, y, z, t);
+    for (int a = 0; a < 3; ++a) {
+      t.x[static_cast<std::size_t>(a)] = x.w[a];
+      t.y[static_cast<std::size_t>(a)] = y.w[a];
+      t.z[static_cast<std::size_t>(a)] = z.w[a];
+    }
+  }
+}
+
+void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out) {
+  std::array<TensorStencil, 3> t;
+  divergence_free_face_stencils(g, X, t);
+  for (std::size_t c = 0; c < 3; ++c) {
+    const TensorStencil& f = t[c];
+    MlsStencil& s = out[c];
+    s.i0 = f.i0;
+    s.j0 = f.j0;
+    s.k0 = f.k0;
+    s.k_centre = f.k_centre;
+    s.c_begin = f.c_begin;
+    s.c_end = f.c_end;
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t b = 0; b < 3; ++b)
+        for (std::size_t a = 0; a < 3; ++a) s.phi[a + 3 * b + 9 * k] = f.x[a] * f.y[b] * f.z[k];
   }
 }
 

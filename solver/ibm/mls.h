@@ -98,6 +98,16 @@ void mls_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array
 // plane). Nodes outside the fluid (the z walls) get φ = 0, as with MLS: with markers kept ≥ Δz
 // from the walls only a wall face itself (where w = 0) can carry weight.
 void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<MlsStencil, 3>& out);
+// The kernel's weights are a tensor product: the same stencils kept as their three 1-D factors,
+// φ_abc = x[a] y[b] z[c] (9 numbers instead of 27: what the transfer streams per marker and
+// component, ours for cost). The MlsStencil overload forms φ from these (x y then z).
+struct TensorStencil {
+  int i0 = 0, j0 = 0, k0 = 0;  // as MlsStencil
+  int k_centre = 0;
+  int c_begin = 0, c_end = 3;
+  std::array<double, 3> x{}, y{}, z{};
+};
+void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X, std::array<TensorStencil, 3>& out);
 
 // One point's 1-D weights in closed form for every staggered location (ours, round 3, for
 // cost): per direction d and node offset (0: faces normal to d, 1: centres), the support's

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include "solver/core/errors.h"
 
@@ -72,10 +73,9 @@ void Transfer::rebuild_body(std::size_t body) {
   const MarkerArrays& m = markers_.markers();
   const Body& b = markers_.bodies()[body];
   BodyEntries& E = entries_[body];
-  if (!b.active) {
-    for (auto& list : E) list.clear();
-    return;
-  }
+  for (auto& list : E.mls) list.clear();
+  for (auto& list : E.tensor) list.clear();
+  if (!b.active) return;
   const int lo = slabs_.k_begin(), hi = slabs_.k_begin() + slabs_.k_count();  // [lo, hi)
   const std::size_t first = b.first_marker, count = b.marker_count;
   // A marker that moved within a cell of a z wall (the MLS support would leave the fluid):
@@ -104,38 +104,55 @@ void Transfer::rebuild_body(std::size_t body) {
       slot[3 * q + static_cast<std::size_t>(c)] = static_cast<std::uint32_t>(n_c[c]++);
     }
   }
-  for (int c = 0; c < 3; ++c) E[static_cast<std::size_t>(c)].resize(n_c[c]);
   // Pass 2: the stencils (the three faces share their 1-D weights), each into its slot.
-  parallel_for_rethrow(static_cast<std::ptrdiff_t>(count), kThreadedMarkers, [&](std::ptrdiff_t qq) {
-    const std::size_t q = static_cast<std::size_t>(qq);
-    if (flags[q] == 0) return;
-    std::array<MlsStencil, 3> st;
-    if (kernel_ == TransferKernel::divergence_free)
-      divergence_free_face_stencils(g, m.position[first + q], st);
+  auto fill = [&](auto& lists, auto stencils) {
+    for (int c = 0; c < 3; ++c) lists[static_cast<std::size_t>(c)].resize(n_c[c]);
+    parallel_for_rethrow(static_cast<std::ptrdiff_t>(count), kThreadedMarkers, [&](std::ptrdiff_t qq) {
+      const std::size_t q = static_cast<std::size_t>(qq);
+      if (flags[q] == 0) return;
+      decltype(stencils) st;
+      if constexpr (std::is_same_v<decltype(stencils), std::array<TensorStencil, 3>>)
+        divergence_free_face_stencils(g, m.position[first + q], st);
+      else
+        mls_face_stencils(g, m.position[first + q], st);
+      for (int c = 0; c < 3; ++c) {
+        const bool owner = (flags[q] >> (2 * c)) & 1, spreads = (flags[q] >> (2 * c + 1)) & 1;
+        if (!(owner || spreads)) continue;
+        auto& e = lists[static_cast<std::size_t>(c)][slot[3 * q + static_cast<std::size_t>(c)]];
+        e.marker = static_cast<std::uint32_t>(first + q);
+        e.owner = owner;
+        e.spreads = spreads;
+        e.stencil = st[static_cast<std::size_t>(c)];
+      }
+    });
+  };
+  if (kernel_ == TransferKernel::divergence_free)
+    fill(E.tensor, std::array<TensorStencil, 3>{});
+  else
+    fill(E.mls, std::array<MlsStencil, 3>{});
+}
+
+template <class Stencil>
+void Transfer::interpolate_entries(const std::vector<Entry<Stencil>>& entries, const auto& f, int c,
+                                   std::vector<Vec3>& out) const {
+  // Each entry writes its own marker's slot: no races.
+#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(entries.size()) >= kThreadedMarkers)
+  for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(entries.size()); ++q) {
+    const Entry<Stencil>& e = entries[static_cast<std::size_t>(q)];
+    if (!e.owner) continue;
+    if constexpr (std::is_same_v<Stencil, TensorStencil>)
+      out[e.marker][c] = apply_stencil(f, e.stencil);
     else
-      mls_face_stencils(g, m.position[first + q], st);
-    for (int c = 0; c < 3; ++c) {
-      const bool owner = (flags[q] >> (2 * c)) & 1, spreads = (flags[q] >> (2 * c + 1)) & 1;
-      if (!(owner || spreads)) continue;
-      Entry& e = E[static_cast<std::size_t>(c)][slot[3 * q + static_cast<std::size_t>(c)]];
-      e.marker = static_cast<std::uint32_t>(first + q);
-      e.owner = owner;
-      e.spreads = spreads;
-      e.stencil = st[static_cast<std::size_t>(c)];
-    }
-  });
+      out[e.marker][c] = apply_stencil(f, e.stencil, e.stencil.phi);
+  }
 }
 
 template <grid::Location L>
 void Transfer::interpolate_component(const grid::Field<L>& f, int c, std::vector<Vec3>& out) const {
-  // Each entry writes its own marker's slot: no races.
+  const auto k = static_cast<std::size_t>(c);
   for (const BodyEntries& body : entries_) {
-    const std::vector<Entry>& entries = body[static_cast<std::size_t>(c)];
-#pragma omp parallel for schedule(static) if (static_cast<std::ptrdiff_t>(entries.size()) >= kThreadedMarkers)
-    for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(entries.size()); ++q) {
-      const Entry& e = entries[static_cast<std::size_t>(q)];
-      if (e.owner) out[e.marker][c] = apply_stencil(f, e.stencil, e.stencil.phi);
-    }
+    interpolate_entries(body.mls[k], f, c, out);
+    interpolate_entries(body.tensor[k], f, c, out);
   }
 }
 
@@ -157,37 +174,70 @@ void Transfer::interpolate(const ConstVelocityView& u, std::vector<Vec3>& out) c
     MPI_Allreduce(MPI_IN_PLACE, out.data()->data(), static_cast<int>(3 * n), MPI_DOUBLE, MPI_SUM, slabs_.comm());
 }
 
+namespace {
+
+// f += amplitude φ on this rank's planes [kb, kb + nzl) of a stencil's support.
+template <grid::Location L>
+void add_stencil(grid::Field<L>& f, const MlsStencil& s, double amplitude) {
+  const int kb = f.k_begin(), nzl = f.k_count();
+  const SupportOffsets o(f, s.i0, s.j0);
+  const std::ptrdiff_t *ii = o.i, *jj = o.j;
+  double* base = f.data() + f.index(0, 0, 0);
+  for (int cc = s.c_begin; cc < s.c_end; ++cc) {
+    const int k = s.k0 + cc - kb;
+    if (k < 0 || k >= nzl) continue;  // another rank's plane
+    double* plane = base + k * f.stride_k();
+    for (int b = 0; b < 3; ++b) {
+      double* row = plane + jj[b];
+      const double* phi = s.phi.data() + 3 * b + 9 * cc;
+      row[ii[0]] += amplitude * phi[0];
+      row[ii[1]] += amplitude * phi[1];
+      row[ii[2]] += amplitude * phi[2];
+    }
+  }
+}
+
+template <grid::Location L>
+void add_stencil(grid::Field<L>& f, const TensorStencil& s, double amplitude) {
+  const int kb = f.k_begin(), nzl = f.k_count();
+  const SupportOffsets o(f, s.i0, s.j0);
+  const std::ptrdiff_t *ii = o.i, *jj = o.j;
+  double* base = f.data() + f.index(0, 0, 0);
+  for (int cc = s.c_begin; cc < s.c_end; ++cc) {
+    const int k = s.k0 + cc - kb;
+    const double zc = s.z[static_cast<std::size_t>(cc)];
+    if (k < 0 || k >= nzl || zc == 0) continue;  // another rank's plane, or no weight
+    double* plane = base + k * f.stride_k();
+    for (int b = 0; b < 3; ++b) {
+      const double yb = s.y[static_cast<std::size_t>(b)];
+      if (yb == 0) continue;
+      double* row = plane + jj[b];
+      const double a_zy = amplitude * zc * yb;
+      row[ii[0]] += a_zy * s.x[0];
+      row[ii[1]] += a_zy * s.x[1];
+      row[ii[2]] += a_zy * s.x[2];
+    }
+  }
+}
+
+}  // namespace
+
 template <grid::Location L>
 void Transfer::spread_component(int c, const std::vector<Vec3>& F, grid::Field<L>& f) const {
   const double cell_volume = slabs_.grid().cell_volume(), h = markers_.h();
   const std::vector<double>& area = markers_.markers().area;
-  const int nx = f.nx(), ny = f.ny(), kb = f.k_begin(), nzl = f.k_count();
-  for (const BodyEntries& body : entries_) {
-    for (const Entry& e : body[static_cast<std::size_t>(c)]) {
+  const auto k = static_cast<std::size_t>(c);
+  auto spread_entries = [&](const auto& entries) {
+    for (const auto& e : entries) {
       if (!e.spreads) continue;
       const double amplitude = area[e.marker] * h / cell_volume * F[e.marker][c];  // ς_b F_b
       if (amplitude == 0) continue;
-      const MlsStencil& s = e.stencil;
-      std::ptrdiff_t ii[3], jj[3];
-      for (int a = 0; a < 3; ++a) {
-        const int i = s.i0 + a, j = s.j0 + a;
-        ii[a] = i >= nx ? i - nx : i;
-        jj[a] = (j >= ny ? j - ny : j) * f.stride_j();
-      }
-      double* base = f.data() + f.index(0, 0, 0);
-      for (int cc = s.c_begin; cc < s.c_end; ++cc) {
-        const int k = s.k0 + cc - kb;
-        if (k < 0 || k >= nzl) continue;  // another rank's plane
-        double* plane = base + k * f.stride_k();
-        for (int b = 0; b < 3; ++b) {
-          double* row = plane + jj[b];
-          const double* phi = s.phi.data() + 3 * b + 9 * cc;
-          row[ii[0]] += amplitude * phi[0];
-          row[ii[1]] += amplitude * phi[1];
-          row[ii[2]] += amplitude * phi[2];
-        }
-      }
+      add_stencil(f, e.stencil, amplitude);
     }
+  };
+  for (const BodyEntries& body : entries_) {
+    spread_entries(body.mls[k]);
+    spread_entries(body.tensor[k]);
   }
 }
 

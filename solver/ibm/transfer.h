@@ -85,16 +85,23 @@ class Transfer {
 
  private:
   double rebuild_tolerance_ = 0;
+  template <class Stencil>
   struct Entry {
     std::uint32_t marker;
     bool owner;       // this rank interpolates it
     bool spreads;     // its support reaches this rank's interior planes
-    MlsStencil stencil;
+    Stencil stencil;
   };
   // Per body, per component (u, v, w): the entries of its markers this rank needs, in marker
-  // order (bodies' markers are contiguous, so body order then entry order is marker order).
-  using BodyEntries = std::array<std::vector<Entry>, 3>;
+  // order (bodies' markers are contiguous, so body order then entry order is marker order); the
+  // kernel's in their 1-D factors (TensorStencil), MLS's as 27 weights.
+  struct BodyEntries {
+    std::array<std::vector<Entry<MlsStencil>>, 3> mls;
+    std::array<std::vector<Entry<TensorStencil>>, 3> tensor;
+  };
   void rebuild_body(std::size_t body);
+  template <class Stencil>
+  void interpolate_entries(const std::vector<Entry<Stencil>>& entries, const auto& f, int c, std::vector<Vec3>& out) const;
   template <grid::Location L>
   void interpolate_component(const grid::Field<L>& f, int c, std::vector<Vec3>& out) const;
   template <grid::Location L>
@@ -111,17 +118,25 @@ class Transfer {
   std::vector<std::uint8_t> flags_;
 };
 
+// A support's x offsets and y row offsets in a field's storage, periodic (i0, j0 in [0, n)).
+struct SupportOffsets {
+  std::ptrdiff_t i[3], j[3];
+  template <grid::Location L>
+  SupportOffsets(const grid::Field<L>& f, int i0, int j0) {
+    for (int a = 0; a < 3; ++a) {
+      const int x = i0 + a, y = j0 + a;
+      i[a] = x >= f.nx() ? x - f.nx() : x;
+      j[a] = (y >= f.ny() ? y - f.ny() : y) * f.stride_j();
+    }
+  }
+};
+
 // Value of a field from an MLS stencil on this rank (planes k0..k0+2 must be local or halo).
 // Planes outside the fluid (φ = 0) are skipped; nodes are visited in the order c, b, a.
 template <grid::Location L>
 double apply_stencil(const grid::Field<L>& f, const MlsStencil& s, const std::array<double, 27>& weights) {
-  const int nx = f.nx(), ny = f.ny();
-  std::ptrdiff_t ii[3], jj[3];
-  for (int a = 0; a < 3; ++a) {
-    const int i = s.i0 + a, j = s.j0 + a;
-    ii[a] = i >= nx ? i - nx : i;
-    jj[a] = (j >= ny ? j - ny : j) * f.stride_j();
-  }
+  const SupportOffsets o(f, s.i0, s.j0);
+  const std::ptrdiff_t *ii = o.i, *jj = o.j;
   const double* base = f.data() + f.index(0, 0, s.k0 - f.k_begin());
   double sum = 0;
   for (int c = s.c_begin; c < s.c_end; ++c) {
@@ -133,6 +148,30 @@ double apply_stencil(const grid::Field<L>& f, const MlsStencil& s, const std::ar
       sum += w[1] * row[ii[1]];
       sum += w[2] * row[ii[2]];
     }
+  }
+  return sum;
+}
+
+// The same from a tensor-product stencil, Σ_c z_c Σ_b y_b Σ_a x_a f (zero rows and planes
+// skipped: the kernel's hat factors leave one of three).
+template <grid::Location L>
+double apply_stencil(const grid::Field<L>& f, const TensorStencil& s) {
+  const SupportOffsets o(f, s.i0, s.j0);
+  const std::ptrdiff_t *ii = o.i, *jj = o.j;
+  const double* base = f.data() + f.index(0, 0, s.k0 - f.k_begin());
+  double sum = 0;
+  for (int c = s.c_begin; c < s.c_end; ++c) {
+    const double zc = s.z[static_cast<std::size_t>(c)];
+    if (zc == 0) continue;
+    const double* plane = base + c * f.stride_k();
+    double plane_sum = 0;
+    for (int b = 0; b < 3; ++b) {
+      const double yb = s.y[static_cast<std::size_t>(b)];
+      if (yb == 0) continue;
+      const double* row = plane + jj[b];
+      plane_sum += yb * (s.x[0] * row[ii[0]] + s.x[1] * row[ii[1]] + s.x[2] * row[ii[2]]);
+    }
+    sum += zc * plane_sum;
   }
   return sum;
 }

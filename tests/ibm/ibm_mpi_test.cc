@@ -22,7 +22,7 @@ struct IbRun {
   Markers markers{grid};
   std::unique_ptr<DirectForcing> forcing;
   std::vector<Vec3> last_forces;
-  explicit IbRun(MPI_Comm comm) : slabs(grid, comm), fluid(slabs, parameters()) {
+  IbRun(MPI_Comm comm, TransferKernel kernel) : slabs(grid, comm), fluid(slabs, parameters()) {
     BodyOptions o;
     o.mm_per_unit = 1.0;
     o.normals = ExpectedNormals::outward;
@@ -33,6 +33,7 @@ struct IbRun {
     ForcingParameters fp;
     fp.iterations = 2;
     fp.carry_over = true;  // round 2: the previous step's force carried over
+    fp.kernel = kernel;
     forcing = std::make_unique<DirectForcing>(slabs, markers, fp);
     fluid.set_body_force([this](const fluid::StepContext& c, const fluid::Velocity& uh, fluid::Velocity& f) {
       markers.advance_rigid(c.dt);
@@ -52,8 +53,14 @@ struct IbRun {
   }
 };
 
-TEST(IbmDecomposition, OneAndTwoRanksGiveTheSameForcesLoadsAndFields) {
-  IbRun world(MPI_COMM_WORLD), self(MPI_COMM_SELF);
+// MLS and the divergence-free kernel (its factored stencils, transfer.h).
+class IbmDecompositionKernels : public ::testing::TestWithParam<TransferKernel> {};
+INSTANTIATE_TEST_SUITE_P(IbmDecomposition, IbmDecompositionKernels,
+                         ::testing::Values(TransferKernel::mls, TransferKernel::divergence_free),
+                         [](const auto& info) { return info.param == TransferKernel::mls ? "mls" : "divergence_free"; });
+
+TEST_P(IbmDecompositionKernels, OneAndTwoRanksGiveTheSameForcesLoadsAndFields) {
+  IbRun world(MPI_COMM_WORLD, GetParam()), self(MPI_COMM_SELF, GetParam());
   for (IbRun* r : {&world, &self})
     for (int n = 0; n < 15; ++n) r->fluid.advance();
   ASSERT_EQ(world.fluid.time(), self.fluid.time());

@@ -235,14 +235,31 @@ TEST(Mls, FastPathsEqualTheStencils) {
 
 // Interpolating a linear field sampled on the staggered grid is exact, through the
 // distributed Transfer (ownership, halos, Allreduce) with markers on a sphere.
-TEST(Transfer, InterpolatesALinearVelocityExactly) {
+// Standard normal values on every face of a velocity, halos included.
+void fill_normal(grid::XFaceField& u, grid::YFaceField& v, grid::ZFaceField& w, std::mt19937& gen) {
+  std::normal_distribution<double> N(0, 1);
+  for (int k = -1; k <= u.k_count(); ++k)
+    for (int j = -1; j <= kGrid.ny(); ++j)
+      for (int i = -1; i <= kGrid.nx(); ++i) {
+        u(i, j, k) = N(gen);
+        v(i, j, k) = N(gen);
+        w(i, j, k) = N(gen);
+      }
+}
+
+// Both kernels (the divergence-free one through its factored stencils).
+class TransferKernels : public ::testing::TestWithParam<TransferKernel> {};
+INSTANTIATE_TEST_SUITE_P(Transfer, TransferKernels, ::testing::Values(TransferKernel::mls, TransferKernel::divergence_free),
+                         [](const auto& info) { return info.param == TransferKernel::mls ? "mls" : "divergence_free"; });
+
+TEST_P(TransferKernels, InterpolatesALinearVelocityExactly) {
   const grid::Slabs slabs(kGrid, MPI_COMM_WORLD);
   Markers markers(kGrid);
   BodyOptions o;
   o.mm_per_unit = 1.0;
   o.normals = ExpectedNormals::outward;
   markers.add_body(sphere_mesh(Vec3(0.6, 0.5, 0.9), 0.3, 2), "sphere", o);
-  const Transfer t(slabs, markers);
+  const Transfer t(slabs, markers, GetParam());
   grid::XFaceField u(slabs);
   grid::YFaceField v(slabs);
   grid::ZFaceField w(slabs);
@@ -272,7 +289,7 @@ TEST(Transfer, InterpolatesALinearVelocityExactly) {
 
 // Above kThreadedMarkers the rebuild, interpolation and spreading run on threads: the stencil
 // lists, the interpolated values and the spread field must be bitwise those of one thread.
-TEST(Transfer, ThreadsGiveBitwiseTheOneThreadResult) {
+TEST_P(TransferKernels, ThreadsGiveBitwiseTheOneThreadResult) {
   const grid::Slabs slabs(kGrid, MPI_COMM_WORLD);
   Markers markers(kGrid);
   BodyOptions o;
@@ -289,19 +306,13 @@ TEST(Transfer, ThreadsGiveBitwiseTheOneThreadResult) {
   grid::XFaceField u(slabs);
   grid::YFaceField v(slabs);
   grid::ZFaceField w(slabs);
-  for (int k = -1; k <= u.k_count(); ++k)
-    for (int j = -1; j <= kGrid.ny(); ++j)
-      for (int i = -1; i <= kGrid.nx(); ++i) {
-        u(i, j, k) = N(gen);
-        v(i, j, k) = N(gen);
-        w(i, j, k) = N(gen);
-      }
+  fill_normal(u, v, w, gen);
   const int threads_before = omp_get_max_threads();
   std::vector<std::vector<Vec3>> interpolated;
   std::vector<std::vector<double>> spread;
   for (int threads : {1, 2}) {
     omp_set_num_threads(threads);
-    const Transfer t(slabs, markers);
+    const Transfer t(slabs, markers, GetParam());
     interpolated.push_back(t.interpolate({u, v, w}));
     grid::XFaceField fu(slabs);
     grid::YFaceField fv(slabs);
@@ -322,6 +333,63 @@ TEST(Transfer, ThreadsGiveBitwiseTheOneThreadResult) {
   EXPECT_EQ(spread[0], spread[1]);
   std::printf("  [measured] %zu markers: 1 vs 2 threads bitwise equal (interpolation %d, spreading %d)\n", markers.size(),
               interpolated[0] == interpolated[1] ? 1 : 0, spread[0] == spread[1] ? 1 : 0);
+}
+
+// The divergence-free kernel's transfer streams its stencils as 1-D factors (TensorStencil, for
+// cost): its interpolation and spreading equal those with the kernel's 27 weights formed
+// (the MlsStencil overload) to round-off, on a sphere of markers over a random field and forces.
+TEST(Transfer, TheKernelsFactoredStencilsEqualItsFullWeights) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
+  Markers markers(kGrid);
+  BodyOptions o;
+  o.mm_per_unit = 1.0;
+  markers.add_body(sphere_mesh(Vec3(0.6, 0.5, 0.9), 0.3, 2), "sphere", o);
+  const Transfer t(slabs, markers, TransferKernel::divergence_free);
+  std::mt19937 gen(7);
+  std::normal_distribution<double> N(0, 1);
+  grid::XFaceField u(slabs);
+  grid::YFaceField v(slabs);
+  grid::ZFaceField w(slabs);
+  fill_normal(u, v, w, gen);
+  std::vector<Vec3> F(markers.size());
+  for (Vec3& x : F) x = Vec3(N(gen), N(gen), N(gen));
+  const std::vector<Vec3> U = t.interpolate({u, v, w});
+  grid::XFaceField fu(slabs), ru(slabs);
+  grid::YFaceField fv(slabs), rv(slabs);
+  grid::ZFaceField fw(slabs), rw(slabs);
+  t.spread(F, {fu, fv, fw});
+  // The reference: the full 27 weights, applied and spread node by node.
+  const double scale = markers.h() / kGrid.cell_volume();
+  double worst_u = 0, worst_f = 0, largest_f = 0;
+  for (std::size_t b = 0; b < markers.size(); ++b) {
+    std::array<MlsStencil, 3> st;
+    divergence_free_face_stencils(kGrid, markers.markers().position[b], st);
+    const double ref[3] = {apply_stencil(u, st[0], st[0].phi), apply_stencil(v, st[1], st[1].phi),
+                           apply_stencil(w, st[2], st[2].phi)};
+    for (int c = 0; c < 3; ++c) worst_u = std::max(worst_u, std::abs(U[b][c] - ref[c]));
+    auto add = [&](auto& f, const MlsStencil& s, double amplitude) {
+      for (int c = s.c_begin; c < s.c_end; ++c)
+        for (int bb = 0; bb < 3; ++bb)
+          for (int a = 0; a < 3; ++a)
+            f((s.i0 + a) % kGrid.nx(), (s.j0 + bb) % kGrid.ny(), s.k0 + c) += amplitude * s.phi[a + 3 * bb + 9 * c];
+    };
+    const double amp = markers.markers().area[b] * scale;
+    add(ru, st[0], amp * F[b].x());
+    add(rv, st[1], amp * F[b].y());
+    add(rw, st[2], amp * F[b].z());
+  }
+  for (int k = 0; k < fu.k_count(); ++k)
+    for (int j = 0; j < kGrid.ny(); ++j)
+      for (int i = 0; i < kGrid.nx(); ++i) {
+        worst_f = std::max({worst_f, std::abs(fu(i, j, k) - ru(i, j, k)), std::abs(fv(i, j, k) - rv(i, j, k)),
+                            std::abs(fw(i, j, k) - rw(i, j, k))});
+        largest_f = std::max({largest_f, std::abs(ru(i, j, k)), std::abs(rv(i, j, k)), std::abs(rw(i, j, k))});
+      }
+  std::printf("  [measured] %zu markers: factored vs full weights: interpolation %.3g (values ~1), spreading %.3g of %.3g\n",
+              markers.size(), worst_u, worst_f, largest_f);
+  EXPECT_GT(largest_f, 0.1);  // the forces reached the grid
+  EXPECT_LT(worst_u, 1e-14 * 8);
+  EXPECT_LT(worst_f, 1e-14 * largest_f);
 }
 
 // rebuild() recomputes only the bodies that moved or were switched: the result equals a fresh
