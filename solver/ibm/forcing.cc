@@ -50,7 +50,10 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
 // inside it, Markers checks that); a marker is excluded when a marker of another body lies
 // within r h (the 27 neighbouring cells checked). O(markers + cells); the box is not wrapped
 // periodically (bodies stay clear of the x, y faces). Same result on every rank (all ranks hold
-// all markers).
+// all markers). For cost (ours): per occupied cell, the bodies present in its 27 neighbours as a
+// bit set (up to 64 bodies; beyond, every marker takes the distance test): a marker whose
+// neighbourhood holds only its own body needs no distance test; the buffers are kept between
+// calls (no page faults per coupling pass).
 void DirectForcing::update_carry_mask() {
   carries_.clear();
   excluded_ = 0;
@@ -66,57 +69,59 @@ void DirectForcing::update_carry_mask() {
     return static_cast<std::size_t>(i) + static_cast<std::size_t>(dims[0]) * (j + static_cast<std::size_t>(dims[1]) * k);
   };
   const std::size_t cells = index(0, 0, dims[2]);
-  std::vector<std::size_t> start(cells + 1, 0), cell_of(n), order(n);
+  std::vector<std::uint32_t>&start = mask_start_, &order = mask_order_, &cell_of = mask_cell_of_;
+  std::vector<std::uint64_t>& present = mask_bodies_;  // per cell: bit (body % 64) of its markers
+  start.assign(cells + 1, 0);
+  present.assign(cells, 0);
+  cell_of.resize(n);
+  order.resize(n);
+  const bool bit_per_body = markers_.bodies().size() <= 64;
+  auto bit = [](std::int32_t body) { return std::uint64_t{1} << (static_cast<unsigned>(body) % 64u); };
   for (std::size_t b = 0; b < n; ++b) {
     const Vec3& x = m.position[b];
-    cell_of[b] = index(coord(x.x(), 0), coord(x.y(), 1), coord(x.z(), 2));
+    cell_of[b] = static_cast<std::uint32_t>(index(coord(x.x(), 0), coord(x.y(), 1), coord(x.z(), 2)));
     ++start[cell_of[b] + 1];
+    present[cell_of[b]] |= bit(m.body[b]);
   }
   for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
-  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t b = 0; b < n; ++b) order[fill[cell_of[b]]++] = b;
-  // Per cell: the one body its markers belong to, kMixed, or kEmpty (ours, for cost: most
-  // markers see only their own body in the 27 cells around them and need no distance test).
-  constexpr std::int32_t kEmpty = -1, kMixed = -2;
-  std::vector<std::int32_t> cell_body(cells, kEmpty);
-  for (std::size_t b = 0; b < n; ++b) {
-    std::int32_t& t = cell_body[cell_of[b]];
-    const std::int32_t body = m.body[b];
-    t = t == kEmpty || t == body ? body : kMixed;
+  {
+    std::vector<std::uint32_t>& fill = mask_fill_;
+    fill.assign(start.begin(), start.end() - 1);
+    for (std::size_t b = 0; b < n; ++b) order[fill[cell_of[b]]++] = static_cast<std::uint32_t>(b);
   }
   carries_.assign(n, 1);
-  for (std::size_t b = 0; b < n; ++b) {
-    const Vec3& x = m.position[b];
-    const int ci = coord(x.x(), 0), cj = coord(x.y(), 1), ck = coord(x.z(), 2);
-    bool others_around = false;
-    for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !others_around; ++k)
-      for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !others_around; ++j)
-        for (int i = std::max(ci - 1, 0); i <= std::min(ci + 1, dims[0] - 1); ++i) {
-          const std::int32_t t = cell_body[index(i, j, k)];
-          if (t != kEmpty && t != m.body[b]) {
-            others_around = true;
-            break;
+  for (int ck = 0; ck < dims[2]; ++ck)
+    for (int cj = 0; cj < dims[1]; ++cj)
+      for (int ci = 0; ci < dims[0]; ++ci) {
+        const std::size_t cell = index(ci, cj, ck);
+        if (start[cell] == start[cell + 1]) continue;
+        std::uint64_t around = 0;
+        for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1); ++k)
+          for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1); ++j)
+            for (int i = std::max(ci - 1, 0); i <= std::min(ci + 1, dims[0] - 1); ++i) around |= present[index(i, j, k)];
+        for (std::uint32_t q0 = start[cell]; q0 < start[cell + 1]; ++q0) {
+          const std::size_t b = order[q0];
+          if (bit_per_body && (around & ~bit(m.body[b])) == 0) continue;  // only its own body around
+          const Vec3& x = m.position[b];
+          bool near_other = false;
+          for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)
+            for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !near_other; ++j)
+              for (int i = std::max(ci - 1, 0); i <= std::min(ci + 1, dims[0] - 1) && !near_other; ++i) {
+                const std::size_t c = index(i, j, k);
+                for (std::uint32_t q = start[c]; q < start[c + 1]; ++q) {
+                  const std::size_t o = order[q];
+                  if (m.body[o] != m.body[b] && (m.position[o] - x).squaredNorm() < r2) {
+                    near_other = true;
+                    break;
+                  }
+                }
+              }
+          if (near_other) {
+            carries_[b] = 0;
+            ++excluded_;
           }
         }
-    if (!others_around) continue;
-    bool near_other = false;
-    for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)
-      for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !near_other; ++j)
-        for (int i = std::max(ci - 1, 0); i <= std::min(ci + 1, dims[0] - 1) && !near_other; ++i) {
-          const std::size_t c = index(i, j, k);
-          for (std::size_t q = start[c]; q < start[c + 1]; ++q) {
-            const std::size_t o = order[q];
-            if (m.body[o] != m.body[b] && (m.position[o] - x).squaredNorm() < r2) {
-              near_other = true;
-              break;
-            }
-          }
-        }
-    if (near_other) {
-      carries_[b] = 0;
-      ++excluded_;
-    }
-  }
+      }
 }
 
 SlipStats DirectForcing::slip_of(const std::vector<Vec3>& interpolated) const {

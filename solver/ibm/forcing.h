@@ -8,6 +8,7 @@
 //
 // The fluid is reached only through its body-force hook (scene/ wires
 // FluidSolver::set_body_force to apply()): this module does not depend on solver/fluid.
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -110,6 +111,9 @@ class DirectForcing {
   ForcingReport report_;
   std::vector<char> carries_;  // per marker: 1 = its force is carried over (empty: all)
   std::size_t excluded_ = 0;
+  // update_carry_mask's buffers (cells' starts and bodies, the markers' cells and sorted order)
+  std::vector<std::uint32_t> mask_start_, mask_order_, mask_cell_of_, mask_fill_;
+  std::vector<std::uint64_t> mask_bodies_;
   // Work velocity û + Δt f of the multi-direct passes (allocated when iterations > 1).
   std::unique_ptr<grid::XFaceField> work_u_;
   std::unique_ptr<grid::YFaceField> work_v_;
