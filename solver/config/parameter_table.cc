@@ -430,7 +430,9 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.time_step_safety, "", 0.9, 0, 1,
                                     "Substep = safety x 2 / omega_max (Gershgorin bound of the tangent stiffness)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.strain_limit, "", 0.6, 0, 0.99,
-                                    "An edge strain |(l - l0)/l| beyond this stops the run as unstable."));
+                                    "An edge strain |(l - l0)/l| beyond this stops the run as unstable (a guard: not "
+                                    "part of a checkpoint's fingerprint, so a stopped fsi/fsei run resumes with a "
+                                    "looser one)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.end_time_ms, "ms", 100, 0, 1e6, "Scene 'mechanics': simulated time."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.output_interval_ms, "ms", 5, 0, 1e5,
                                     "Scene 'mechanics': outer step (loads updated, series sampled, positions written)."));
@@ -466,6 +468,12 @@ std::vector<Param> build_table() {
                            "(no chordae)."));
   t.push_back(SYSTOLE_REAL(structure.mitral_limit_mm, "mm", 1, 0, 50,
                            "Body 'mitral_leaflets': largest displacement of a leaflet node towards the LA (ours)."));
+  t.push_back(SYSTOLE_REAL(structure.aortic_cusp_radius_limit, "", 0, 0, 5,
+                           "Bodies 'aortic_cusp_*' (scenes 'fsi'/'fsei'): a free cusp node stays within this many "
+                           "aortic orifice radii of the valve's axis, or within its stress-free distance if that is "
+                           "larger (ours; 0: off). 1 opens the valve to a cylinder of the orifice and keeps the "
+                           "cusps off the sinus wall, where the immersed boundary left no blood between them "
+                           "(docs/fsei.md, session 15)."));
   // --- scene "ibm": immersed-boundary verification (nondimensional: D, U, D/U) -----------
   t.push_back(SYSTOLE_CHOICE(ibm.verification_case, "fixed_sphere",
                              (std::vector<std::string_view>{"fixed_sphere", "oscillating_sphere", "womersley_pipe",

@@ -448,6 +448,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     // The seed's limiter (no chordae): towards the atrium, -z (ours: all the time; the seed's
     // applies in systole only, and the leaflets open towards +z).
     if (mitral && s.structure.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
+    // The open cusps kept off the sinus wall (structure.aortic_cusp_radius_limit, ours).
+    const bool cusp = std::find(std::begin(geometry::kAorticCuspBodies), std::end(geometry::kAorticCuspBodies), name) !=
+                      std::end(geometry::kAorticCuspBodies);
+    if (cusp && s.structure.aortic_cusp_radius_limit > 0)
+      models.back().set_radial_limit(heart.plane.aortic_centre_mm, heart.lv_axis_direction,
+                                     s.structure.aortic_cusp_radius_limit * heart.plane.aortic_radius_mm);
     // The Darcy outlet held (fsei.aortic_outlet_held, ours): anchored to the plane alone, the
     // descending aorta's free end drifted 3 mm into the box's wall by 111 ms (docs/fsei.md).
     if (name == geometry::kAortaBody && fs.aortic_outlet_held) {

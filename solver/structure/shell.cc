@@ -359,6 +359,20 @@ void ShellModel::set_displacement_limit(const Vec3& axis, double max_mm) {
   limit_mm_ = max_mm;
 }
 
+void ShellModel::set_radial_limit(const Vec3& axis_point_mm, const Vec3& axis_direction, double radius_mm) {
+  if (!(axis_direction.norm() > 0) || !(radius_mm > 0) || !std::isfinite(radius_mm))
+    throw InputError("body '" + name_ + "': radial limit needs a non-zero axis and a radius > 0 (got " +
+                     std::to_string(radius_mm) + " mm)");
+  radial_on_ = true;
+  radial_point_mm_ = axis_point_mm;
+  radial_axis_ = axis_direction.normalized();
+  radial_max_mm_.resize(node_count());
+  for (std::size_t i = 0; i < node_count(); ++i) {
+    const Vec3 d = mesh_.position_mm[i] - radial_point_mm_;
+    radial_max_mm_[i] = std::max(radius_mm, (d - d.dot(radial_axis_) * radial_axis_).norm());
+  }
+}
+
 void ShellModel::set_state(std::vector<Vec3> x_mm, std::vector<Vec3> v_mm_per_ms) {
   if (x_mm.size() != node_count() || v_mm_per_ms.size() != node_count())
     throw std::invalid_argument("set_state: wrong size for body '" + name_ + "'");
@@ -727,6 +741,19 @@ void ShellModel::begin_substep(double dt) {
       x_[i] -= (d - limit_mm_) * limit_axis_;
       const double vn = v_[i].dot(limit_axis_);
       if (vn > 0) v_[i] -= vn * limit_axis_;
+    }
+  }
+  if (radial_on_) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (fixed_[i]) continue;
+      const Vec3 d = x_[i] - radial_point_mm_;
+      const Vec3 radial = d - d.dot(radial_axis_) * radial_axis_;
+      const double r = radial.norm();
+      if (r <= radial_max_mm_[i]) continue;
+      const Vec3 e = radial / r;
+      x_[i] -= (r - radial_max_mm_[i]) * e;
+      const double vr = v_[i].dot(e);
+      if (vr > 0) v_[i] -= vr * e;
     }
   }
   time_ms_ += dt;

@@ -143,6 +143,11 @@ class ShellModel {
   // projected away and the velocity component along axis, if outward, removed (inelastic, ours).
   void set_displacement_limit(const Vec3& axis, double max_mm);
   void clear_displacement_limit() { limit_on_ = false; }
+  // A radial limiter (ours; the aortic cusps): every free node stays within
+  // max(radius_mm, its stress-free distance) of the line through axis_point_mm along
+  // axis_direction; applied after every drift like the displacement limit (the excess projected
+  // away radially, an outward radial velocity removed).
+  void set_radial_limit(const Vec3& axis_point_mm, const Vec3& axis_direction, double radius_mm);
 
   // --- time integration ---
   // Stable step (ms) at the current state: safety * 2 / sqrt(max over free nodes of the
@@ -284,6 +289,9 @@ class ShellModel {
   bool limit_on_ = false;
   Vec3 limit_axis_ = Vec3::UnitZ();
   double limit_mm_ = 0;
+  bool radial_on_ = false;
+  Vec3 radial_point_mm_ = Vec3::Zero(), radial_axis_ = Vec3::UnitZ();
+  std::vector<double> radial_max_mm_;  // per node
   double time_ms_ = 0;
   // Worst edge at the last force evaluation.
   double worst_strain_ = 0;

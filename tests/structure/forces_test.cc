@@ -407,6 +407,33 @@ TEST(StructureConstraints, DisplacementLimiterHoldsTheLeaflet) {
             << deepest(limited) << " mm\n";
 }
 
+// The aortic cusps' radial limiter (ours): a pressurised sphere inflates beyond 1.05 of its
+// radius from its z axis when free, and stays within that cylinder with the limiter; nodes that
+// start outside the limit (none here) would keep their stress-free distance instead.
+TEST(StructureConstraints, RadialLimiterHoldsTheNodesWithinTheCylinder) {
+  const double r0 = 10, limit = 10.5;
+  const auto mesh = icosphere(r0, 2, 1.5, geometry::Tissue::kAorticLeaflet, true);
+  auto widest = [](const ShellModel& b) {
+    double r = 0;
+    for (const auto& p : b.positions_mm()) r = std::max(r, std::hypot(p.x(), p.y()));
+    return r;
+  };
+  ShellOptions opt;
+  opt.damping_per_ms = 0.3;
+  ShellModel free_body(mesh, seed_materials(), opt), limited(mesh, seed_materials(), opt);
+  limited.set_radial_limit(Vec3(0, 0, 3), Vec3(0, 0, -2), limit);  // any point on the axis, either sense
+  for (ShellModel* b : {&free_body, &limited}) {
+    b->set_cavity_pressure(0.05);
+    b->advance(50);
+  }
+  std::cout << "  widest radius from the axis after 50 ms: free " << widest(free_body) << " mm, limited "
+            << widest(limited) << " mm (limit " << limit << ")\n";
+  EXPECT_GT(widest(free_body), limit + 0.5);  // the load does push beyond the limit
+  EXPECT_LE(widest(limited), limit + 1e-9);
+  EXPECT_GT(widest(limited), limit - 0.05);  // and the limited sphere reaches it
+  EXPECT_THROW(limited.set_radial_limit(Vec3::Zero(), Vec3::UnitZ(), 0.0), InputError);
+}
+
 }  // namespace
 }  // namespace systole::structure
 
