@@ -586,6 +586,13 @@ std::vector<Param> build_table() {
                              "the built aorta is in equilibrium with that pressure inside and none outside "
                              "(solver/structure/prestress.h; with fsei.aortic_pressure_ramp_ms the shortening is "
                              "ramped). docs/fsei.md."));
+  t.push_back(SYSTOLE_REAL(fsei.aortic_prestress_fraction, "", 1, 0.05, 1,
+                           "Scenes 'fsei'/'fsi', with fsei.aortic_pretension = prestress: the share of "
+                           "fsei.aortic_pressure_mmhg the aorta's wall carries by its pre-stress; the rest, (1 - share) "
+                           "x the ground pressure, by the outer load (ours: a wall pre-stressed for all of it sits on "
+                           "the stiff part of the Fung law, 0.46 ml/mmHg dry at 60-70 mmHg against 1.05 with the "
+                           "outer load alone, which buckles when the blood's pressure falls below it; "
+                           "bench/structure/aorta_compliance, docs/fsei.md session 16)."));
   t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over, false,
                            "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
                            "(ours; it made the membrane sphere tight but set off an oscillation in the heart "

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
@@ -208,15 +209,26 @@ StateArchive read_state_file(const fs::path& file, std::string& fingerprint) {
 
 void check_fingerprint(const fs::path& checkpoint, const std::string& stored, const std::string& current) {
   if (stored == current) return;
+  auto path_of = [](const std::string& line) { return line.substr(0, line.find('=')); };
   // A checkpoint written before a parameter was excluded still carries its line: skip it.
-  auto lines = [](const std::string& s) {
+  auto lines = [&](const std::string& s) {
     std::vector<std::string> out;
     std::istringstream in(s);
     for (std::string l; std::getline(in, l);)
-      if (!excluded(std::string_view(l).substr(0, l.find('=')))) out.push_back(l);
+      if (!excluded(path_of(l))) out.push_back(l);
     return out;
   };
-  const auto a = lines(stored), b = lines(current);
+  const auto a = lines(stored);
+  // A checkpoint written before a parameter existed has no line for it: the run it continues
+  // had the parameter's default behaviour (a new parameter defaults to the old behaviour), so a
+  // current line at the default value is skipped (ours).
+  std::set<std::string> stored_paths;
+  for (const auto& l : a) stored_paths.insert(path_of(l));
+  std::set<std::string> defaults;
+  for (const auto& l : lines(scenario_fingerprint(config::default_scenario()))) defaults.insert(l);
+  std::vector<std::string> b;
+  for (const auto& l : lines(current))
+    if (stored_paths.count(path_of(l)) || !defaults.count(l)) b.push_back(l);
   if (a == b) return;
   std::string there = "(nothing)", here = "(nothing)";
   for (std::size_t i = 0; i < std::max(a.size(), b.size()); ++i) {

@@ -356,6 +356,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   const double period_ms = s.period_ms();
   const double sync_ms = fs.sync_step_ms;
   const double end_ms = fs.end_time_ms > 0 ? fs.end_time_ms : s.beats * period_ms;
+  if (fs.aortic_prestress_fraction != 1 && fs.aortic_pretension != "prestress")
+    throw InputError("fsei.aortic_prestress_fraction = " + std::to_string(fs.aortic_prestress_fraction) +
+                     " is the share of the pre-stress: it needs fsei.aortic_pretension = \"prestress\" (got \"" +
+                     fs.aortic_pretension + "\"); with \"outer_load\" leave it at 1");
   if (with_ep) {
     const double ratio = sync_ms / s.electro.time_step_ms;
     if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
@@ -483,18 +487,21 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // outer load stays on; the wall's elasticity adds to it as the aorta fills.) The fluid's
   // pressure is incremental, so the offset persists: the outer fluid stays the reference.
   const bool aorta_prestressed = fs.aortic_pretension == "prestress" && fs.aortic_pressure_mmhg > 0;
-  const double aortic_outer_kpa =
-      aorta_prestressed ? 0.0 : fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+  // The wall's share of the ground pressure (fsei.aortic_prestress_fraction, ours): 1 with
+  // prestress, 0 with the outer load; the outer load carries the rest.
+  const double wall_share = aorta_prestressed ? fs.aortic_prestress_fraction : 0.0;
+  const double aortic_outer_kpa = (1 - wall_share) * fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
   // fsei.aortic_pretension = prestress (ours): instead of the outer load, the aorta's springs are
-  // shortened so that its built shape is in equilibrium with the ground pressure inside (on every
-  // triangle outside the Darcy outlet, as the outer load) and none outside; anchors and the held
-  // outlet take the reactions (structure/prestress.h). With a ramp the rest lengths go from the
-  // built ones to these over fsei.aortic_pressure_ramp_ms (set in the loads transfer).
+  // shortened so that its built shape is in equilibrium with the wall's share of the ground
+  // pressure inside (on every triangle outside the Darcy outlet, as the outer load) and none
+  // outside; anchors and the held outlet take the reactions (structure/prestress.h). With a ramp
+  // the rest lengths go from the built ones to these over fsei.aortic_pressure_ramp_ms (set in the
+  // loads transfer), as the outer load does.
   std::vector<double> aorta_built_rest_mm, aorta_prestress_rest_mm;
   std::optional<structure::Prestress> aorta_prestress;
   if (aorta_prestressed) {
     structure::ShellModel& aorta = group.body(kAorta);
-    const double p_kpa = fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
+    const double p_kpa = wall_share * fs.aortic_pressure_mmhg * units::kPaPerMmHg * 1e-3;
     aorta_prestress = structure::membrane_prestress(
         aorta, structure::pressure_nodal_forces(aorta.stress_free_mesh(), aorta.positions_mm(), -p_kpa, geometry::kOutflow));
     aorta_prestress_rest_mm = aorta_prestress->rest_length_mm;
@@ -819,6 +826,13 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // Series added after a checkpoint's version (not in it) cannot be resumed: they are left out of
   // the result (and of later checkpoints) with a note, never filled in.
   bool wall_slip_series = true;
+  // The afterload's flow (ours): through the descending aorta's cross-section where the Darcy
+  // region starts (a disk of the outflow's radius normal to z: the procedural heart's descending
+  // aorta runs along z; for one that does not, the series is left out with a note), + towards the
+  // outlet. With the root pressure it gives the outlet's resistance.
+  std::vector<double> q_out;
+  const Vec3 outflow_axis = (heart.outflow.end_mm - heart.outflow.start_mm).normalized();
+  bool outlet_series = std::abs(outflow_axis.z()) > 0.99;
   // The immersed boundary's leak seen at the walls (ours): the blood's flux through the LV's and
   // the aorta's markers relative to the walls, −Σ (u(X_b) − V_b)·n_b A_b over each body's active
   // markers, out of the cavity positive (the tiles' normals point into the cavity, the shells'
@@ -893,6 +907,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     // the mitral orifice into the LV (+z)
     q_ao.push_back(-disk_flux(fluid, heart.plane.aortic_centre_mm, heart.plane.aortic_radius_mm) * ml_s_per_unit);
     q_mi.push_back(disk_flux(fluid, heart.plane.mitral_centre_mm, heart.plane.mitral_radius_mm) * ml_s_per_unit);
+    if (outlet_series)
+      q_out.push_back((outflow_axis.z() > 0 ? 1.0 : -1.0) *
+                      disk_flux(fluid, heart.outflow.start_mm, heart.outflow.radius_mm) * ml_s_per_unit);
     {
       const fluid::Velocity& u = fluid.velocity();
       const std::vector<Vec3> ub = forcing.transfer().interpolate(ibm::ConstVelocityView{u.u, u.v, u.w});
@@ -936,7 +953,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
                      twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back(),
                      wall_slip_series ? lv_wall_slip.back() : 0.0, wall_slip_series ? aorta_wall_slip.back() : 0.0,
-                     wall_slip_series ? plane_slip.back() : 0.0})
+                     wall_slip_series ? plane_slip.back() : 0.0, outlet_series ? q_out.back() : 0.0})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
@@ -963,15 +980,18 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"ke", &ke},           {"twist", &twist}, {"gls", &gls},     {"gcs", &gcs},
       {"u_mitral_tips", &u_mitral_tips},        {"u_aortic_tips", &u_aortic_tips},
       {"wss_cusps", &wss_cusps},               {"lv_wall_slip", &lv_wall_slip},
-      {"aorta_wall_slip", &aorta_wall_slip},   {"plane_slip", &plane_slip}};
+      {"aorta_wall_slip", &aorta_wall_slip},   {"plane_slip", &plane_slip},
+      {"q_out", &q_out}};
   double t = 0;
   set_caps(0);
   if (resume_from) {
     t = resumed.scalar("scene/time_ms");
     const long samples = static_cast<long>(resumed.get("series/t_ms").size());
     wall_slip_series = resumed.has("series/lv_wall_slip") && resumed.has("series/plane_slip");
+    outlet_series = outlet_series && resumed.has("series/q_out");
     for (auto& [name, v] : series_state)
-      if (wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip && v != &plane_slip))
+      if ((wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip && v != &plane_slip)) &&
+          (outlet_series || v != &q_out))
         *v = resumed.get("series/" + name, samples);
     // (a checkpoint of an earlier version has no phase-average accumulators: they start here)
     wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
@@ -1108,6 +1128,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       if (wall_slip_series)
         m << " lv_slip_ml_s " << lv_wall_slip.back() << " aorta_slip_ml_s " << aorta_wall_slip.back() << " plane_slip_ml_s "
           << plane_slip.back();
+      if (outlet_series) m << " q_out_ml_s " << q_out.back();
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();
         m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals
@@ -1174,6 +1195,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                            "aorta_wall_slip_flux_ml_s, valvular_plane_slip_flux_ml_s, lv_wall_slip_volume_ml and "
                            "valvular_plane_slip_volume_ml are not reported");
   }
+  if (!outlet_series)
+    result.notes.push_back(std::abs(outflow_axis.z()) > 0.99
+                               ? "resumed from a checkpoint without the outlet's flow: aortic_outlet_flow_ml_s is not reported"
+                               : "the descending aorta's outlet is not along z: aortic_outlet_flow_ml_s is not reported");
   M["kinetic_energy_max_mj"] = max_of(ke);
   auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
     double best = 0;
@@ -1233,6 +1258,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
     add("valvular_plane_slip_flux_ml_s", "ml/s", plane_slip);
   }
+  if (outlet_series) add("aortic_outlet_flow_ml_s", "ml/s", q_out);
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   {
     std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);
@@ -1303,11 +1329,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     std::ostringstream m;
     m << "aorta pre-tension: ground pressure " << fs.aortic_pressure_mmhg << " mmHg (";
     if (aorta_prestress)
-      m << "a pre-stress of the wall: springs shortened by " << 100 * aorta_prestress->mean_strain << " % on average, "
+      m << (wall_share < 1 ? std::to_string(wall_share) + " of it by " : std::string()) << "a pre-stress of the wall: springs shortened by " << 100 * aorta_prestress->mean_strain << " % on average, "
         << 100 * aorta_prestress->max_strain << " % at most (spring " << aorta_prestress->max_strain_spring << "), "
         << aorta_prestress->compressed_springs << " pre-compressed (down to " << 100 * aorta_prestress->min_strain
         << " %), equilibrium residual " << aorta_prestress->residual_relative
-        << " of the load; ";
+        << " of the load; " << (wall_share < 1 ? "the rest by an outer load on the wall outside the Darcy region; " : "");
     else
       m << "outer load on the wall outside the Darcy region; ";
     if (fs.aortic_pressure_ramp_ms > 0)

@@ -179,6 +179,10 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
       error_of(scenario("fsei", {{"fsei", {{"sync_step_ms", 0.075}}}, {"electro", {{"time_step_ms", 0.05}}}}));
   EXPECT_NE(sync.find("fsei.sync_step_ms = 0.075"), std::string::npos) << sync;
   EXPECT_NE(sync.find("whole multiple of electro.time_step_ms"), std::string::npos) << sync;
+  // The pre-stress's share without the pre-stress.
+  const std::string share = error_of(scenario("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}}));
+  EXPECT_NE(share.find("fsei.aortic_prestress_fraction = 0.25"), std::string::npos) << share;
+  EXPECT_NE(share.find("needs fsei.aortic_pretension = \"prestress\""), std::string::npos) << share;
 }
 
 // The first 3 ms of systole at the coarse preset, prescribed tension (fsi): everything is
@@ -692,6 +696,32 @@ TEST(FseiScene, ACheckpointsFingerprintSkipsParametersNoLongerFingerprinted) {
   std::string other = older;
   other.replace(other.find("fluid.cfl="), std::string("fluid.cfl=").size(), "fluid.cfl=9");
   EXPECT_THROW(check_fingerprint("old", other, current), InputError);
+}
+
+// A checkpoint written before a parameter existed (no line for it) continues a run that had the
+// parameter's default behaviour: it resumes when this scenario keeps the default, and is refused,
+// naming the parameter, when it sets another value.
+TEST(FseiScene, ACheckpointFromBeforeAParameterResumesAtItsDefault) {
+  auto without = [](std::string f, const std::string& path) {
+    const std::size_t at = f.find(path + "=");
+    EXPECT_NE(at, std::string::npos) << path;
+    if (at != std::string::npos) f.erase(at, f.find('\n', at) + 1 - at);
+    return f;
+  };
+  const nlohmann::json prestress{{"fsei", {{"aortic_pretension", "prestress"}}}};
+  const std::string current = scenario_fingerprint(scenario("fsi", prestress));
+  const std::string older = without(current, "fsei.aortic_prestress_fraction");
+  EXPECT_NO_THROW(check_fingerprint("old", older, current));
+  const std::string half = scenario_fingerprint(
+      scenario("fsi", {{"fsei", {{"aortic_pretension", "prestress"}, {"aortic_prestress_fraction", 0.5}}}}));
+  try {
+    check_fingerprint("old", older, half);
+    ADD_FAILURE() << "a checkpoint from before the parameter resumed with another value of it";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fsei.aortic_prestress_fraction=0.5"), std::string::npos) << e.what();
+  }
+  // a parameter the checkpoint has keeps being compared, default or not
+  EXPECT_THROW(check_fingerprint("old", half, current), InputError);
 }
 
 }  // namespace
