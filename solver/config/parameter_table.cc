@@ -261,7 +261,10 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.cfl, "", 0.2, 0, 1, "Target CFL number."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.max_dt_ms, "ms", 0.1, 0, 10, "Largest fluid time step."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.darcy_permeability, "", 0.001, 0, 1,
-                                    "Darcy afterload permeability k, nondimensional (seed 0.001)."));
+                                    "Darcy afterload permeability k, nondimensional (seed 0.001). In scenes 'fsi'/'fsei' "
+                                    "the region is the aorta's last 1.5 diameters: its resistance is about 0.0173/k "
+                                    "mmHg s/ml (17 at 0.001, 15x a human's ~1.1; 1.3 measured at 0.016: docs/fsei.md "
+                                    "session 16)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.carreau_yasuda_mu0_pa_s, "Pa*s", 0.056, 0, 10,
                                     "Carreau-Yasuda zero-shear viscosity mu0 in mu = mu_inf + (mu0 - mu_inf) "
                                     "[1 + (lambda gamma_dot)^a]^((n-1)/a); blood: Cho & Kensey 1991."));
@@ -572,6 +575,12 @@ std::vector<Param> build_table() {
                            "spacings of another body's markers carry no force over (ours; anti-windup where two "
                            "bodies' targets conflict in one support, e.g. leaflets meeting at a commissure); 0: "
                            "every marker carries. docs/fsei.md."));
+  t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over_exclusion_plane, true,
+                           "Scenes 'fsei'/'fsi', with the carry-over's exclusion: true, the rigid valvular plane's "
+                           "markers next to another body carry nothing over, as every body's; false, they keep "
+                           "their carry-over (ours: the plane is the largest leak left; with MLS a cusp crumpled "
+                           "next to it: docs/fsei.md sessions 12 and 16). The other bodies' markers next to the "
+                           "plane carry none either way."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "

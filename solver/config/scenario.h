@@ -222,6 +222,7 @@ struct Fsei {
   std::string aortic_pretension;        // "outer_load" | "prestress": how the wall holds the ground pressure (ours)
   double forcing_carry_over_exclusion_cells;  // ibm::ForcingParameters::carry_over_exclusion_cells (ours)
   std::string forcing_kernel;           // "mls" | "divergence_free": ibm::ForcingParameters::kernel (ours)
+  bool forcing_carry_over_exclusion_plane;  // ibm::ForcingParameters::carry_over_exclusion_rigid (ours)
   double aortic_prestress_fraction;     // with "prestress": the wall's share of the ground pressure, the rest an outer load (ours)
 };
 

@@ -102,6 +102,8 @@ void DirectForcing::update_carry_mask() {
         for (std::uint32_t q0 = start[cell]; q0 < start[cell + 1]; ++q0) {
           const std::size_t b = order[q0];
           if (bit_per_body && (around & ~bit(m.body[b])) == 0) continue;  // only its own body around
+          if (!par_.carry_over_exclusion_rigid && markers_.bodies()[static_cast<std::size_t>(m.body[b])].options.rigid)
+            continue;
           const Vec3& x = m.position[b];
           bool near_other = false;
           for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)

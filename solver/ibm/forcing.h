@@ -40,6 +40,11 @@ struct ForcingParameters {
   // bodies count too: leaving the valvular plane out, the heart's cusps crumpled at 16.6 ms
   // (docs/fsei.md, session 12).
   double carry_over_exclusion_cells = 0.0;
+  // With the exclusion: false keeps the carry-over of rigid bodies' markers next to other bodies
+  // (ours; the other bodies' markers next to them still carry none). A rigid body's target is
+  // its own prescribed motion, which its anchored neighbours share; tried with MLS (session 12)
+  // a cusp crumpled next to the plane: docs/fsei.md.
+  bool carry_over_exclusion_rigid = true;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
   double rebuild_tolerance_cells = 0;

@@ -592,6 +592,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   forcing_parameters.carry_over = fs.forcing_carry_over;
   forcing_parameters.carry_over_factor = fs.forcing_carry_over_factor;
   forcing_parameters.carry_over_exclusion_cells = fs.forcing_carry_over_exclusion_cells;
+  forcing_parameters.carry_over_exclusion_rigid = fs.forcing_carry_over_exclusion_plane;  // the plane: the one rigid body
   forcing_parameters.iterations = fs.forcing_iterations;
   forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
   forcing_parameters.kernel =

@@ -63,6 +63,36 @@ TEST(CarryOverExclusion, MarkersNearAnotherBodyAreExactlyTheExcludedOnes) {
   EXPECT_THROW(validate(bad), InputError);
 }
 
+// carry_over_exclusion_rigid = false (ours): a rigid body's markers keep their carry-over next to
+// another body; the deformable body's markers next to the rigid one are still excluded: exactly
+// those, by brute force. The same two spheres one h apart, the left one deformable.
+TEST(CarryOverExclusion, ARigidBodyCanKeepItsCarryOver) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
+  Markers m(kGrid);
+  BodyOptions deformable = unit_options();
+  deformable.rigid = false;
+  m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", deformable);
+  m.add_body(sphere_mesh(Vec3(26.4, 24, 24), 6, 2), "right", unit_options());
+  ForcingParameters p;
+  p.carry_over = true;
+  p.carry_over_exclusion_cells = 2;
+  const DirectForcing both(slabs, m, p);
+  p.carry_over_exclusion_rigid = false;
+  const DirectForcing spared(slabs, m, p);
+  std::size_t near_left = 0, near_right = 0;
+  const auto& a = m.markers();
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < a.size(); ++j)
+      if (a.body[i] != a.body[j] && (a.position[i] - a.position[j]).norm() < 2 * m.h()) {
+        ++(a.body[i] == 0 ? near_left : near_right);
+        break;
+      }
+  ASSERT_GT(near_left, 0u);
+  ASSERT_GT(near_right, 0u);
+  EXPECT_EQ(both.carry_over_excluded(), near_left + near_right);
+  EXPECT_EQ(spared.carry_over_excluded(), near_left);
+}
+
 TEST(Markers, OneMarkerPerTileWithAreaNormalAndBody) {
   Markers m(kGrid);
   // A sphere of diameter 1 (24 mm) at the box centre; automatic tiling to ≤ 0.7 h.
