@@ -333,6 +333,39 @@ TEST(FluidSolver, DarcySinkStopsTheFlowInItsRegion) {
   EXPECT_GT(out_g, 0.5);
 }
 
+// The Darcy sink as a resistance (the afterload, MODEL.md §2; docs/fsei.md session 16 derives
+// the heart outlet's resistance from it): a uniform body force f drives a uniform flow along x
+// through a slab of the sink across a periodic box; the pressure's periodicity gives f L = u L_d / k,
+// u = f k L / L_d, with L_d the slab as its x-faces see it (3 of 16 faces: L / L_d = 16/3). The
+// sink is applied to u* (which holds the previous pressure gradient: incremental projection), so the
+// steady state satisfies u / k = f - grad p exactly, at any step: measured 8e-9 relative at
+// dt = k/10, k/20, k/40 (the transient left after 19 relaxation times k L / L_d).
+TEST(FluidSolver, DarcySlabPassesTheDarcyLawsFlowAtAnyStep) {
+  const Grid g({16, 4, 4, 1, 0.25, 0.25});
+  const Slabs s(g, MPI_COMM_WORLD);
+  const double k = 0.01, force = 1.0;
+  const double darcy = force * k * 16.0 / 3.0;  // u = f k L / L_d
+  for (double dt : {1e-3, 5e-4, 2.5e-4}) {
+    FluidParameters p;
+    p.reynolds = 100;
+    p.darcy_permeability = k;
+    p.darcy_regions.push_back({0.28, 0.47, 0, 0.25, 0, 0.25});  // faces x = 5/16, 6/16, 7/16
+    p.bottom_wall.kind = p.top_wall.kind = WallKind::free_slip;
+    p.adaptive_dt = false;
+    p.max_dt = dt;
+    FluidSolver f(s, p);
+    f.set_body_force([&](const StepContext&, const Velocity&, Velocity& fv) { fv.u.fill(force); });
+    f.advance_to(1.0);  // 19 relaxation times
+    double lo = 1e300, hi = -1e300;
+    for (int kk = 0; kk < f.velocity().u.k_count(); ++kk)
+      for (int j = 0; j < g.ny(); ++j)
+        for (int i = 0; i < g.nx(); ++i) lo = std::min(lo, f.velocity().u(i, j, kk)), hi = std::max(hi, f.velocity().u(i, j, kk));
+    EXPECT_LT(hi - lo, 1e-9 * darcy);  // uniform: the projection leaves no other flow
+    std::printf("  [measured] dt %.2g: u %.9f, Darcy's %.9f, relative error %.2g\n", dt, hi, darcy, std::abs(hi - darcy) / darcy);
+    EXPECT_LT(std::abs(hi - darcy), 1e-6 * darcy) << dt;
+  }
+}
+
 TEST(FluidSolver, BodyForceHookSeesUHatAndAcceleratesTheFlow) {
   const Slabs s(Grid({4, 4, 4, 1, 1, 1}), MPI_COMM_WORLD);
   FluidParameters p;
