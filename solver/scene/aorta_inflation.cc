@@ -30,16 +30,17 @@ double signed_volume_mm3(const geometry::TriMesh& mesh, const std::vector<Vec3>&
 structure::ShellModel make_aorta(const config::Scenario& s, const geometry::LeftHeart& heart, double damping_per_ms) {
   if (!(damping_per_ms > 0))
     throw InputError("aorta inflation: damping_per_ms = " + std::to_string(damping_per_ms) + " must be > 0");
+  if (!s.fsei.aortic_outlet_held)
+    throw InputError("aorta inflation needs fsei.aortic_outlet_held = true: the lumen's volume is measured between "
+                     "fixed ends");
   structure::ShellOptions o = structure_options(s, heart.plane.z_mm);
   o.damping_per_ms = damping_per_ms;
   const geometry::TriMesh& mesh = heart.body(geometry::kAortaBody);
   structure::ShellModel aorta(mesh, chamber_wall_materials(s), o);
-  if (s.fsei.aortic_outlet_held) {  // as the scenes hold it (fsei_scene.cc)
-    std::vector<std::int32_t> outlet;
-    for (std::size_t i = 0; i < mesh.node_count(); ++i)
-      if (mesh.region[i] & geometry::kOutflow) outlet.push_back(static_cast<std::int32_t>(i));
-    aorta.fix_nodes(outlet);
-  }
+  std::vector<std::int32_t> outlet;  // held as the scenes hold it (fsei_scene.cc)
+  for (std::size_t i = 0; i < mesh.node_count(); ++i)
+    if (mesh.region[i] & geometry::kOutflow) outlet.push_back(static_cast<std::int32_t>(i));
+  aorta.fix_nodes(outlet);
   return aorta;
 }
 
@@ -91,23 +92,15 @@ AortaInflationPoint AortaInflation::hold(double pressure_mmhg, double ramp_ms, d
   pressure_mmhg_ = pressure_mmhg;
   const int window = std::max(1, static_cast<int>(std::lround(settle_window_ms / kStepMs)));
   std::deque<double> recent{volume_change_ml()};
-  AortaInflationPoint out;
-  for (double held = 0; held < max_ms; held += kStepMs) {
+  bool settled = false;
+  for (double held = 0; held < max_ms && !settled; held += kStepMs) {
     advance(kStepMs, pressure_mmhg_);
     recent.push_back(volume_change_ml());
     if (static_cast<int>(recent.size()) > window + 1) recent.pop_front();
-    if (static_cast<int>(recent.size()) == window + 1 && std::abs(recent.back() - recent.front()) < settle_ml) {
-      out.settled = true;
-      break;
-    }
+    settled = static_cast<int>(recent.size()) == window + 1 && std::abs(recent.back() - recent.front()) < settle_ml;
   }
-  const AortaInflationPoint s = sample();
-  out.pressure_mmhg = s.pressure_mmhg;
-  out.volume_change_ml = s.volume_change_ml;
-  out.max_strain = s.max_strain;
-  out.min_strain = s.min_strain;
-  out.max_displacement_mm = s.max_displacement_mm;
-  out.time_ms = s.time_ms;
+  AortaInflationPoint out = sample();
+  out.settled = settled;
   return out;
 }
 

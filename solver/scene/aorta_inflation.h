@@ -3,8 +3,9 @@
 // ground pressure, the dry counterpart of the afterload that scenes fsi and fsei see
 // (docs/fsei.md, session 16), used by bench/structure/aorta_compliance and the tests.
 //
-// The aorta of the procedural heart with the scenes' options (tissue, structure.*, the held
-// Darcy outlet of fsei.aortic_outlet_held, the root anchored to the valvular plane) carries a
+// The aorta of the procedural heart with the scenes' options (tissue, structure.*, its Darcy
+// outlet held as fsei.aortic_outlet_held holds it, which it requires; the root anchored to the
+// valvular plane) carries a
 // ground pressure p0 in one of the ways of fsei.aortic_pretension, generalised (ours):
 //  - a share f of p0 by the wall's pre-stress: the springs' rest lengths from
 //    structure::membrane_prestress at f p0, so the built shape is in equilibrium with f p0 inside;
@@ -42,7 +43,8 @@ struct AortaInflationPoint {
 class AortaInflation {
  public:
   // Throws InputError for bad input (the fraction outside [0, 1], a ground pressure < 0, a
-  // damping <= 0, a pre-stress beyond the strain limit: structure::membrane_prestress's message).
+  // damping <= 0, an outlet not held, a pre-stress beyond the strain limit:
+  // structure::membrane_prestress's message).
   AortaInflation(const config::Scenario& scenario, double ground_pressure_mmhg, double prestress_fraction,
                  double damping_per_ms);
 

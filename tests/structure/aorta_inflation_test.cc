@@ -68,6 +68,9 @@ TEST(AortaInflation, BadInputNamesTheValue) {
     EXPECT_NE(std::string(e.what()).find("prestress_fraction = 1.5"), std::string::npos) << e.what();
   }
   EXPECT_THROW(scene::AortaInflation(aorta_scenario(), 60, 1.0, 0.0), InputError);
+  config::Scenario free_outlet = aorta_scenario();
+  free_outlet.fsei.aortic_outlet_held = false;
+  EXPECT_THROW(scene::AortaInflation(free_outlet, 60, 1.0, 0.5), InputError);
 }
 
 }  // namespace
