@@ -262,8 +262,9 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.max_dt_ms, "ms", 0.1, 0, 10, "Largest fluid time step."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.darcy_permeability, "", 0.001, 0, 1,
                                     "Darcy afterload permeability k, nondimensional (seed 0.001). In scenes 'fsi'/'fsei' "
-                                    "the region is the aorta's last 1.5 diameters: its resistance is about 0.0173/k "
-                                    "mmHg s/ml (17 at 0.001, 15x a human's ~1.1; 1.3 measured at 0.016: docs/fsei.md "
+                                    "the region is the aorta's last 1.5 diameters: Darcy's law over it gives 0.0173/k "
+                                    "mmHg s/ml (17 at 0.001, 15x a human's ~1.1); measured in the heart: 6.8 at 0.001 "
+                                    "with MLS's leaky walls, 1.2-1.4 at 0.016 in the tight setting (docs/fsei.md "
                                     "session 16)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.carreau_yasuda_mu0_pa_s, "Pa*s", 0.056, 0, 10,
                                     "Carreau-Yasuda zero-shear viscosity mu0 in mu = mu_inf + (mu0 - mu_inf) "
