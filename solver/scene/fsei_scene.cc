@@ -800,7 +800,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (resume_from) scheduler.import_state(resumed, "scheduler/");
 
   // 7. probes: LV at 40 % of the long axis below the plane, the aortic root 8 mm above the
-  //    aortic orifice, the LA at its nodes' centroid, the outer reference in a box corner (ours)
+  //    aortic orifice, the LA at its nodes' centroid, the outer reference in a box corner, the
+  //    descending aorta one outflow radius upstream of the Darcy region (ours; the root's probe
+  //    sits in the ejection's jet, whose dynamic pressure it does not see: docs/fsei.md session 16)
   std::vector<Probe> probes;
   {
     const Vec3 lv_c = heart.plane.centre_mm + 0.4 * s.geometry.lv_long_axis_mm * heart.lv_axis_direction;
@@ -810,7 +812,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     la_c /= static_cast<double>(heart.body(geometry::kLaBody).node_count());
     const double r = fs.probe_radius_mm + 1;
     const Vec3 ref(r, r, 0.5 * s.fluid.box_z_mm);
-    probes = {{"lv", lv_c}, {"la", la_c}, {"aortic_root", ao_c}, {"outer", ref}};
+    const Vec3 down = (heart.outflow.end_mm - heart.outflow.start_mm).normalized();
+    const Vec3 desc_c = heart.outflow.start_mm - heart.outflow.radius_mm * down;
+    probes = {{"lv", lv_c}, {"la", la_c}, {"aortic_root", ao_c}, {"outer", ref}, {"descending_aorta", desc_c}};
   }
   const double mmhg_per_unit = s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s /
                                units::kPaPerMmHg;
@@ -832,6 +836,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // aorta runs along z; for one that does not, the series is left out with a note), + towards the
   // outlet. With the root pressure it gives the outlet's resistance.
   std::vector<double> q_out;
+  // The afterload's pressure (ours): the descending aorta's probe, where the ejection's jet has
+  // spread (the root's probe reads low inside it); with q_out, the outlet's resistance.
+  std::vector<double> p_desc;
+  bool desc_series = true;
   const Vec3 outflow_axis = (heart.outflow.end_mm - heart.outflow.start_mm).normalized();
   bool outlet_series = std::abs(outflow_axis.z()) > 0.99;
   // The immersed boundary's leak seen at the walls (ours): the blood's flux through the LV's and
@@ -902,6 +910,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     p_lv.push_back((p[0] - p[3]) * mmhg_per_unit);
     p_la.push_back((p[1] - p[3]) * mmhg_per_unit);
     p_ao.push_back((p[2] - p[3]) * mmhg_per_unit);
+    if (desc_series) p_desc.push_back((p[4] - p[3]) * mmhg_per_unit);
     v_lv.push_back(group.body(kLv).cavity_volume_mm3() * kMlPerMm3);
     v_la.push_back(group.body(kLa).cavity_volume_mm3() * kMlPerMm3);
     // ejection: the flow through the aortic orifice towards the aorta (-z); filling: through
@@ -954,7 +963,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (double v : {p_lv.back(), p_la.back(), p_ao.back(), v_lv.back(), v_la.back(), q_ao.back(), q_mi.back(), ke.back(),
                      twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back(),
                      wall_slip_series ? lv_wall_slip.back() : 0.0, wall_slip_series ? aorta_wall_slip.back() : 0.0,
-                     wall_slip_series ? plane_slip.back() : 0.0, outlet_series ? q_out.back() : 0.0})
+                     wall_slip_series ? plane_slip.back() : 0.0, outlet_series ? q_out.back() : 0.0,
+                     desc_series ? p_desc.back() : 0.0})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
@@ -982,7 +992,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"u_mitral_tips", &u_mitral_tips},        {"u_aortic_tips", &u_aortic_tips},
       {"wss_cusps", &wss_cusps},               {"lv_wall_slip", &lv_wall_slip},
       {"aorta_wall_slip", &aorta_wall_slip},   {"plane_slip", &plane_slip},
-      {"q_out", &q_out}};
+      {"q_out", &q_out},                       {"p_desc", &p_desc}};
   double t = 0;
   set_caps(0);
   if (resume_from) {
@@ -990,9 +1000,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     const long samples = static_cast<long>(resumed.get("series/t_ms").size());
     wall_slip_series = resumed.has("series/lv_wall_slip") && resumed.has("series/plane_slip");
     outlet_series = outlet_series && resumed.has("series/q_out");
+    desc_series = resumed.has("series/p_desc");
     for (auto& [name, v] : series_state)
       if ((wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip && v != &plane_slip)) &&
-          (outlet_series || v != &q_out))
+          (outlet_series || v != &q_out) && (desc_series || v != &p_desc))
         *v = resumed.get("series/" + name, samples);
     // (a checkpoint of an earlier version has no phase-average accumulators: they start here)
     wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
@@ -1130,6 +1141,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         m << " lv_slip_ml_s " << lv_wall_slip.back() << " aorta_slip_ml_s " << aorta_wall_slip.back() << " plane_slip_ml_s "
           << plane_slip.back();
       if (outlet_series) m << " q_out_ml_s " << q_out.back();
+      if (desc_series) m << " p_desc_mmhg " << p_desc.back();
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();
         m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals
@@ -1200,6 +1212,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     result.notes.push_back(std::abs(outflow_axis.z()) > 0.99
                                ? "resumed from a checkpoint without the outlet's flow: aortic_outlet_flow_ml_s is not reported"
                                : "the descending aorta's outlet is not along z: aortic_outlet_flow_ml_s is not reported");
+  if (!desc_series)
+    result.notes.push_back("resumed from a checkpoint without the descending aorta's pressure: "
+                           "descending_aorta_pressure_mmhg is not reported");
   M["kinetic_energy_max_mj"] = max_of(ke);
   auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
     double best = 0;
@@ -1260,6 +1275,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     add("valvular_plane_slip_flux_ml_s", "ml/s", plane_slip);
   }
   if (outlet_series) add("aortic_outlet_flow_ml_s", "ml/s", q_out);
+  if (desc_series) add("descending_aorta_pressure_mmhg", "mmHg", p_desc);
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   {
     std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);

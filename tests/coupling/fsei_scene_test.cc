@@ -293,6 +293,10 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   for (const char* name : {"mitral_tip_velocity_m_s", "aortic_tip_velocity_m_s"})
     for (double x : series(name)) EXPECT_LT(std::abs(x), 0.05) << name;
   EXPECT_GT(std::abs(series("lv_longitudinal_strain").back()), 0.0);  // the wall did move
+  // The descending aorta's probe, behind the closed aortic valve too: the LV leads it by > 5x.
+  const auto& p_desc = series("descending_aorta_pressure_mmhg");
+  ASSERT_EQ(p_desc.size(), p_lv.size());
+  for (double x : p_desc) EXPECT_LT(5 * std::abs(x), p_lv.back());
   // The cusps' wall shear stress: 0 with the blood at rest, then small behind the closed valve
   // (< 1 Pa; the seed's peak systole has > 3 Pa at the tips).
   const auto& wss = series("aortic_cusps_wss_max_pa");
