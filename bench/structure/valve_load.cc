@@ -3,7 +3,8 @@
 // much do its edges strain? The dry counterpart of the fsei runs' first milliseconds (docs/fsei.md).
 //   valve_load aortic|mitral [pressure_mmhg=60] [ramp_ms=10] [hold_ms=40] [damping_per_ms=0.5]
 //              [path=value ...]
-// aortic: the three cusps, loaded from the aorta; mitral: the two leaflets loaded from the LV,
+// aortic: the three cusps, loaded from the aorta; mitral: the two leaflets loaded from the LV
+// (a negative pressure_mmhg opens the valve: loaded from the aorta's / the LA's side instead),
 // with the scenario's limiter. Prints per ms: pressure, the largest displacement from the built
 // shape, the largest and smallest edge strain, the active contact pairs and the stable substep.
 // VALVE_LOAD_DUMP=file writes, at the end or when the valve fails, one line per node

@@ -472,6 +472,12 @@ std::vector<Param> build_table() {
                            "(no chordae)."));
   t.push_back(SYSTOLE_REAL(structure.mitral_limit_mm, "mm", 1, 0, 50,
                            "Body 'mitral_leaflets': largest displacement of a leaflet node towards the LA (ours)."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(
+      structure.mitral_limiter_end_phase, "", 1, 0, 1,
+      "Scenes 'fsi'/'fsei': the mitral limiter holds over the phases t/T in [0, this) of every beat and "
+      "releases the leaflets after it (the seed limits them in systole only); 1: all the time (ours). "
+      "The limiter blocks the leaflets' opening: they open by swinging about the commissures, which "
+      "lifts their free edges towards the LA (docs/fsei.md, session 17)."));
   t.push_back(SYSTOLE_REAL(structure.aortic_cusp_radius_limit, "", 0, 0, 5,
                            "Bodies 'aortic_cusp_*' (scenes 'fsi'/'fsei'): a free cusp node stays within this many "
                            "aortic orifice radii of the valve's axis, or within its stress-free distance if that is "

@@ -162,6 +162,7 @@ struct Structure {
   double contact_stiffness_kpa_per_mm;
   bool mitral_limiter;                  // body "mitral_leaflets": the seed's displacement limiter
   double mitral_limit_mm;
+  double mitral_limiter_end_phase;      // scenes fsi/fsei: the limiter holds over phases [0, this) (1: always, ours)
   double aortic_cusp_radius_limit;      // bodies "aortic_cusp_*": radial limiter / orifice radius (ours; 0: off)
   double fung_exponent_cap;             // law "fung_tension": largest a eps^2 (ours)
   double fung_compression_fraction;     // law "fung_tension": Fung stiffening kept in compression (ours)

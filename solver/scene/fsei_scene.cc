@@ -350,6 +350,12 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
   return out;
 }
 
+bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase) {
+  if (end_phase >= 1) return true;
+  const double phase_ms = t_ms - std::floor(t_ms / period_ms + 1e-9) * period_ms;
+  return phase_ms < end_phase * period_ms - 1e-9;
+}
+
 RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   const bool with_ep = s.scene == "fsei";
   const config::Fsei& fs = s.fsei;
@@ -360,6 +366,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     throw InputError("fsei.aortic_prestress_fraction = " + std::to_string(fs.aortic_prestress_fraction) +
                      " is the share of the pre-stress: it needs fsei.aortic_pretension = \"prestress\" (got \"" +
                      fs.aortic_pretension + "\"); with \"outer_load\" leave it at 1");
+  if (s.structure.mitral_limiter_end_phase != 1 && !s.structure.mitral_limiter)
+    throw InputError("structure.mitral_limiter_end_phase = " + std::to_string(s.structure.mitral_limiter_end_phase) +
+                     " is the mitral limiter's window: it needs structure.mitral_limiter = true; without the "
+                     "limiter leave it at 1");
   if (with_ep) {
     const double ratio = sync_ms / s.electro.time_step_ms;
     if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
@@ -449,8 +459,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     const bool chamber = name == geometry::kLvBody || name == geometry::kLaBody;
     models.emplace_back(heart.body(name), materials, chamber ? wall : other);
     const bool mitral = name == geometry::kMitralAnteriorBody || name == geometry::kMitralPosteriorBody;
-    // The seed's limiter (no chordae): towards the atrium, -z (ours: all the time; the seed's
-    // applies in systole only, and the leaflets open towards +z).
+    // The seed's limiter (no chordae): towards the atrium, -z; it holds over the phases
+    // [0, structure.mitral_limiter_end_phase) of every beat (set_mitral_limiter below; the seed's
+    // in systole only, ours by default all the time).
     if (mitral && s.structure.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
     // The open cusps kept off the sinus wall (structure.aortic_cusp_radius_limit, ours).
     const bool cusp = std::find(std::begin(geometry::kAorticCuspBodies), std::end(geometry::kAorticCuspBodies), name) !=
@@ -977,6 +988,38 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     const double phase = std::fmod(t, period_ms);
     return phase >= period_ms - s.av_delay_ms - 1e-9;
   };
+  // The mitral limiter's window (structure.mitral_limiter_end_phase): on over the phases
+  // [0, end) of every beat, off after. Engaging it projects every leaflet node back within the
+  // limit in the next structure step; how far beyond it a node was is reported (a note), since
+  // the projection is a kinematic jump (ours).
+  const double limiter_end_ms = s.structure.mitral_limiter_end_phase * period_ms;
+  auto mitral_limited = [&](double t) { return mitral_limiter_holds(t, period_ms, s.structure.mitral_limiter_end_phase); };
+  bool mitral_limiter_on = s.structure.mitral_limiter;
+  double limiter_engage_worst_mm = 0, limiter_engage_worst_t = 0;
+  std::string limiter_engage_worst_node;
+  int limiter_engagements = 0;
+  auto set_mitral_limiter = [&](double t) {
+    if (!s.structure.mitral_limiter || mitral_limited(t) == mitral_limiter_on) return;
+    mitral_limiter_on = !mitral_limiter_on;
+    for (std::string_view name : {geometry::kMitralAnteriorBody, geometry::kMitralPosteriorBody}) {
+      const auto k = static_cast<std::size_t>(std::find(deformable.begin(), deformable.end(), name) - deformable.begin());
+      structure::ShellModel& leaflet = group.body(k);
+      if (!mitral_limiter_on) {
+        leaflet.clear_displacement_limit();
+        continue;
+      }
+      const std::vector<Vec3>& x = leaflet.positions_mm();
+      const std::vector<Vec3>& x0 = leaflet.stress_free_mesh().position_mm;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const double beyond = (x0[i] - x[i]).z() - s.structure.mitral_limit_mm;  // towards the LA, -z
+        if (beyond > limiter_engage_worst_mm)
+          limiter_engage_worst_mm = beyond, limiter_engage_worst_t = t,
+          limiter_engage_worst_node = std::string(name) + "' node " + std::to_string(i);
+      }
+      leaflet.set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
+    }
+    if (mitral_limiter_on) ++limiter_engagements;
+  };
   auto set_caps = [&](double t) {
     for (const Link& l : links)
       if (l.cap && markers.bodies()[static_cast<std::size_t>(l.marker_body)].active != caps_closed(t)) {
@@ -995,6 +1038,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"q_out", &q_out},                       {"p_desc", &p_desc}};
   double t = 0;
   set_caps(0);
+  set_mitral_limiter(0);
   if (resume_from) {
     t = resumed.scalar("scene/time_ms");
     const long samples = static_cast<long>(resumed.get("series/t_ms").size());
@@ -1009,6 +1053,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
     if (wss_phase_from_ms == 0) wss_phase.import_state(resumed, "scene/wss_phase/");
     set_caps(t);
+    set_mitral_limiter(t);
   } else {
     sample();
   }
@@ -1091,7 +1136,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     // frame (which is not a sample)
     double next = std::min(end_ms, (std::floor(t / dt_sample + 1e-9) + 1) * dt_sample);
     const double beat0 = std::floor(t / period_ms + 1e-9) * period_ms;
-    for (double sw : {beat0 + period_ms - s.av_delay_ms, beat0 + period_ms})
+    for (double sw : {beat0 + period_ms - s.av_delay_ms, beat0 + period_ms, beat0 + limiter_end_ms})
       if (sw > t + 1e-9 && sw < next) next = sw;
     const double next_interval_frame =
         fields && fs.field_interval_ms > 0 ? static_cast<double>(field_frames_done) * fs.field_interval_ms : 1e300;
@@ -1120,6 +1165,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     }
     t = next;
     set_caps(t);
+    set_mitral_limiter(t);
     if (fields && std::abs(t - next_field) < 1e-9) {
       fields->frame(t, fluid, group, node_wss_pa(fluid_module.wall_shear()));
       if (std::abs(t - next_interval_frame) < 1e-9) ++field_frames_done;
@@ -1212,6 +1258,15 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     result.notes.push_back(std::abs(outflow_axis.z()) > 0.99
                                ? "resumed from a checkpoint without the outlet's flow: aortic_outlet_flow_ml_s is not reported"
                                : "the descending aorta's outlet is not along z: aortic_outlet_flow_ml_s is not reported");
+  if (s.structure.mitral_limiter && s.structure.mitral_limiter_end_phase < 1) {
+    std::ostringstream m;
+    m << "the mitral limiter held over t/T in [0, " << s.structure.mitral_limiter_end_phase << ") of every beat; engaged "
+      << limiter_engagements << " time(s) at a beat's start in this run";
+    if (limiter_engage_worst_mm > 0)
+      m << ", the farthest node beyond its limit at an engagement: body '" << limiter_engage_worst_node << " by "
+        << limiter_engage_worst_mm << " mm at t = " << limiter_engage_worst_t << " ms (projected back in one step)";
+    result.notes.push_back(m.str());
+  }
   if (!desc_series)
     result.notes.push_back("resumed from a checkpoint without the descending aorta's pressure: "
                            "descending_aorta_pressure_mmhg is not reported");

@@ -63,4 +63,10 @@ const std::vector<std::string>& fsei_metric_names();
 std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<Series>& series, double period_ms,
                                                              const std::string& scene);
 
+// Whether the mitral limiter holds at time t_ms (structure.mitral_limiter_end_phase): over the
+// phases [0, end_phase) of every beat of period_ms, always when end_phase >= 1. The phase is
+// read as the scene's intervals are clipped, so a time within 1e-9 ms below a beat's start is
+// that beat's start (the limiter holds) and the window's end belongs to the released part.
+bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase);
+
 }  // namespace systole::scene

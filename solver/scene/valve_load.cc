@@ -1,6 +1,7 @@
 #include "solver/scene/valve_load.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 
 #include "solver/core/errors.h"
@@ -47,8 +48,9 @@ ClosedValveLoad::ClosedValveLoad(const config::Scenario& scenario, Valve valve, 
       group_(make_group(scenario, heart_, valve, names_, damping_per_ms)) {}
 
 ValveLoadSample ClosedValveLoad::advance(double step_ms, double pressure_mmhg) {
-  if (!(step_ms > 0) || !(pressure_mmhg >= 0))
-    throw InputError("valve load: step_ms must be > 0 and pressure_mmhg >= 0");
+  if (!(step_ms > 0) || !std::isfinite(pressure_mmhg))
+    throw InputError("valve load: step_ms must be > 0 and pressure_mmhg finite (got step_ms = " + std::to_string(step_ms) +
+                     ", pressure_mmhg = " + std::to_string(pressure_mmhg) + ")");
   // Leaflet normals face -z (the aorta / atrium side): set_cavity_pressure(p) pushes along -n,
   // i.e. +z, from the aorta into the LV; the LV's pressure on the mitral leaflets pushes -z.
   const double sign = valve_ == Valve::kAortic ? 1.0 : -1.0;

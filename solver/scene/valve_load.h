@@ -32,8 +32,9 @@ class ClosedValveLoad {
   // Builds the heart of `scenario` and the valve's bodies. Throws InputError for bad input.
   ClosedValveLoad(const config::Scenario& scenario, Valve valve, double damping_per_ms);
 
-  // Advances by step_ms (> 0) with the pressure difference pressure_mmhg (>= 0) pushing the
-  // closed valve towards the LV (aortic) or the LA (mitral). Throws InstabilityError, naming
+  // Advances by step_ms (> 0) with the pressure difference pressure_mmhg pushing the closed
+  // valve towards the LV (aortic) or the LA (mitral) when positive, and opening it (from the
+  // aorta's / the LA's side higher to the other) when negative. Throws InstabilityError, naming
   // the body, node and time, when the valve fails (an edge beyond the strain limit, a stable
   // step below the minimum); the state is then that of the failure.
   ValveLoadSample advance(double step_ms, double pressure_mmhg);

@@ -183,6 +183,34 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   const std::string share = error_of(scenario("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}}));
   EXPECT_NE(share.find("fsei.aortic_prestress_fraction = 0.25"), std::string::npos) << share;
   EXPECT_NE(share.find("needs fsei.aortic_pretension = \"prestress\""), std::string::npos) << share;
+  // The mitral limiter's window without the limiter; a window outside (0, 1].
+  const std::string window = error_of(
+      scenario("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}}));
+  EXPECT_NE(window.find("structure.mitral_limiter_end_phase = 0.4"), std::string::npos) << window;
+  EXPECT_NE(window.find("needs structure.mitral_limiter = true"), std::string::npos) << window;
+  std::string zero = "no error";
+  try {
+    scenario("fsi", {{"structure", {{"mitral_limiter_end_phase", 0}}}});
+  } catch (const std::exception& e) {
+    zero = e.what();
+  }
+  EXPECT_NE(zero.find("structure.mitral_limiter_end_phase"), std::string::npos) << zero;
+}
+
+// The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
+// off after, on again at the next beat's start, also at a time a rounding below it; always
+// with end 1.
+TEST(FseiScene, TheMitralLimiterHoldsOverItsWindowOfEveryBeat) {
+  const double T = 857.142857142857;  // 70 bpm
+  EXPECT_TRUE(mitral_limiter_holds(0, T, 0.4));
+  EXPECT_TRUE(mitral_limiter_holds(0.399 * T, T, 0.4));
+  EXPECT_FALSE(mitral_limiter_holds(0.4 * T, T, 0.4));
+  EXPECT_FALSE(mitral_limiter_holds(0.99 * T, T, 0.4));
+  EXPECT_TRUE(mitral_limiter_holds(T, T, 0.4));
+  EXPECT_TRUE(mitral_limiter_holds(3 * T - 1e-12, T, 0.4));
+  EXPECT_TRUE(mitral_limiter_holds(2.3 * T, T, 0.4));
+  EXPECT_FALSE(mitral_limiter_holds(2.5 * T, T, 0.4));
+  for (double t : {0.0, 0.4 * T, T - 1e-12, T - 1e-3, 5.7 * T}) EXPECT_TRUE(mitral_limiter_holds(t, T, 1.0)) << t;
 }
 
 // The first 3 ms of systole at the coarse preset, prescribed tension (fsi): everything is
