@@ -86,14 +86,34 @@ std::optional<double> first_crossing(std::span<const double> time_s, std::span<c
   return std::nullopt;
 }
 
+std::optional<double> first_lasting_crossing(std::span<const double> time_s, std::span<const double> values,
+                                             double level, Crossing direction, double min_dwell_s) {
+  check_same_size(time_s, values, "values");
+  require(min_dwell_s >= 0, "min_dwell_s must be >= 0");
+  const bool up = direction == Crossing::kUpward;
+  const auto beyond = [&](double x) { return up ? x > level : x <= level; };
+  for (std::size_t i = 1; i < values.size(); ++i) {
+    const double a = values[i - 1], b = values[i];
+    if (beyond(a) || !beyond(b)) continue;  // no crossing between samples i-1 and i
+    const double t = time_s[i - 1] + (level - a) / (b - a) * (time_s[i] - time_s[i - 1]);
+    std::size_t j = i;  // samples i, i+1, ... within the dwell must stay beyond the level
+    while (j < values.size() && time_s[j] <= t + min_dwell_s && beyond(values[j])) ++j;
+    if (j == values.size() || time_s[j] > t + min_dwell_s) return t;
+    i = j;  // back across within the dwell: sample j is on the old side; search on from it
+  }
+  return std::nullopt;
+}
+
 ValveEvents valve_events(std::span<const double> time_s, std::span<const double> flow_ml_s,
-                         double beat_start_s, double period_s, double threshold_fraction) {
+                         double beat_start_s, double period_s, double threshold_fraction,
+                         double min_dwell_fraction) {
   require(period_s > 0, "period_s must be positive");
-  const double level = threshold_fraction * peak_abs(flow_ml_s);
+  require(min_dwell_fraction >= 0 && min_dwell_fraction < 1, "min_dwell_fraction must be in [0, 1)");
+  const double level = threshold_fraction * peak_abs(flow_ml_s), dwell_s = min_dwell_fraction * period_s;
   ValveEvents e;
-  if (auto t = first_crossing(time_s, flow_ml_s, level, Crossing::kUpward))
+  if (auto t = first_lasting_crossing(time_s, flow_ml_s, level, Crossing::kUpward, dwell_s))
     e.open_phase = (*t - beat_start_s) / period_s;
-  if (auto t = first_crossing(time_s, flow_ml_s, level, Crossing::kDownward))
+  if (auto t = first_lasting_crossing(time_s, flow_ml_s, level, Crossing::kDownward, dwell_s))
     e.close_phase = (*t - beat_start_s) / period_s;
   return e;
 }
@@ -111,9 +131,9 @@ BeatMetrics compute_beat_metrics(const BeatSamples& b) {
   BeatMetrics m;
   m.heart_rate_bpm = 60.0 / b.period_s;
   m.aortic_valve = valve_events(b.time_s, b.aortic_flow_ml_s, b.beat_start_s, b.period_s,
-                                b.valve_threshold_fraction);
+                                b.valve_threshold_fraction, b.valve_min_dwell_fraction);
   m.mitral_valve = valve_events(b.time_s, b.mitral_flow_ml_s, b.beat_start_s, b.period_s,
-                                b.valve_threshold_fraction);
+                                b.valve_threshold_fraction, b.valve_min_dwell_fraction);
   const auto& v = b.lv_volume_ml;
   auto at_phase_or = [&](const std::optional<double>& ph, size_t fallback, double& volume,
                          double& pressure) {

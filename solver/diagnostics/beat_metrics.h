@@ -34,6 +34,11 @@ struct BeatSamples {
   // A valve is "open" while its flow exceeds threshold_fraction * (peak |flow| of that valve
   // over the beat). 0 = sign changes (right for 0-D curves); noisy 3-D curves may want ~0.01.
   double valve_threshold_fraction = 0;
+  // A crossing counts as a valve event only if the flow then stays on its new side of the
+  // level for valve_min_dwell_fraction * period_s (or to the window's end) (ours): a 3-D valve
+  // flow ripples through the level for a few ms around an opening (p2's mitral "opened" at
+  // 0.386 T and "closed" at 0.388 T, docs/fsei.md session 17). 0 = every crossing counts.
+  double valve_min_dwell_fraction = 0;
   // true: end-diastole is the beat's first sample (EDV, EDP there) instead of the mitral
   // closure, for beats that start at the activation with the valves closed (scenes fsi/fsei).
   bool end_diastole_at_beat_start = false;
@@ -99,8 +104,16 @@ enum class Crossing { kUpward, kDownward };
 std::optional<double> first_crossing(std::span<const double> time_s, std::span<const double> values,
                                      double level, Crossing direction);
 
-// Opening/closing phases of one valve from its flow curve (see ValveEvents).
+// As first_crossing, but the first crossing after which the values stay on the new side of
+// `level` (upward: > level; downward: <= level) for at least min_dwell_s, or up to the last
+// sample if fewer remain. min_dwell_s = 0 is first_crossing.
+std::optional<double> first_lasting_crossing(std::span<const double> time_s, std::span<const double> values,
+                                             double level, Crossing direction, double min_dwell_s);
+
+// Opening/closing phases of one valve from its flow curve (see ValveEvents): the first lasting
+// crossings of threshold_fraction * peak |flow| (dwell min_dwell_fraction * period_s).
 ValveEvents valve_events(std::span<const double> time_s, std::span<const double> flow_ml_s,
-                         double beat_start_s, double period_s, double threshold_fraction = 0);
+                         double beat_start_s, double period_s, double threshold_fraction = 0,
+                         double min_dwell_fraction = 0);
 
 }  // namespace systole::diagnostics

@@ -326,6 +326,9 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     // a valve is open while its flow exceeds 5 % of its peak: the leaflets' motion and the
     // closed valves' leak move a few % of the peak flow back and forth (ours)
     bs.valve_threshold_fraction = 0.05;
+    // ... and the flow must stay across that level for 2 % of the period (17 ms at 70 bpm): the
+    // leaflets' flutter moves the flow through it for a few ms around an opening (ours)
+    bs.valve_min_dwell_fraction = 0.02;
     // End-diastole is the window's start (ours): the scene starts every beat at the activation
     // with the valves closed (MODEL.md §1), not at the first mitral closure in the window
     // (which, after a weak E wave, is a closure of a closed valve's back-and-forth flow: EF −5 %

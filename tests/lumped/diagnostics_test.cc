@@ -151,5 +151,32 @@ TEST(BeatMetrics, ThresholdIgnoresSmallNoise) {
   EXPECT_NEAR(*valve_events(t, q, 0, 1, 0.05).open_phase, 0.5 + 0.05 * 500 / 100 * 0.1, 1e-9);
 }
 
+TEST(BeatMetrics, ADwellIgnoresARippleThroughTheThreshold) {
+  // A 3-D valve flow (p2's mitral, docs/fsei.md session 17): it pokes above the 5 % level for
+  // ~4 ms around t = 0.387 and drops back, then opens for good at t = 0.395 (linear ramps, so the
+  // crossings are exact), and falls below the level again only at t = 0.95.
+  std::vector<double> t, q;
+  for (int i = 0; i <= 1000; ++i) {
+    const double s = 1e-3 * i;
+    double f = 0;
+    if (s >= 0.385 && s <= 0.389) f = 20 - 8000 * std::abs(s - 0.387);  // 20 at the top, 4 at the ends
+    if (s >= 0.39) f = std::min(100.0, 1000 * (s - 0.39));               // 5 at t = 0.395
+    if (s >= 0.9) f = std::max(0.0, 100 - 2000 * (s - 0.9));             // 5 at t = 0.9475
+    t.push_back(s);
+    q.push_back(f);
+  }
+  // the level is 5 % of 100 = 5: the ripple crosses it at 0.387 -/+ 15/8000
+  const ValveEvents any = valve_events(t, q, 0, 1, 0.05);
+  EXPECT_NEAR(*any.open_phase, 0.387 - 15.0 / 8000, 1e-9);
+  EXPECT_NEAR(*any.close_phase, 0.387 + 15.0 / 8000, 1e-9);
+  const ValveEvents lasting = valve_events(t, q, 0, 1, 0.05, 0.02);
+  EXPECT_NEAR(*lasting.open_phase, 0.395, 1e-9);
+  EXPECT_NEAR(*lasting.close_phase, 0.9475, 1e-9);
+  // a closure too near the window's end for the whole dwell still counts (nothing contradicts it)
+  const std::span<const double> ts(t.data(), 951), qs(q.data(), 951);
+  EXPECT_NEAR(*valve_events(ts, qs, 0, 1, 0.05, 0.02).close_phase, 0.9475, 1e-9);
+  EXPECT_THROW(valve_events(t, q, 0, 1, 0.05, -0.1), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace systole::diagnostics

@@ -1,0 +1,44 @@
+// Beat metrics of scenes fsi/fsei re-derived from a run's time_series.csv (the scene's own
+// definitions, scene::fsei_beat_metrics): for runs recorded before a definition changed, and for
+// reading one beat of a long run without its metrics.json.
+//   fsei_beats DIR/time_series.csv PERIOD_MS
+// Prints one JSON object per whole beat in the series on stdout.
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "solver/core/errors.h"
+#include "solver/scene/fsei_scene.h"
+
+int main(int argc, char** argv) {
+  try {
+    if (argc != 3) throw systole::InputError("usage: fsei_beats TIME_SERIES_CSV PERIOD_MS");
+    std::ifstream in(argv[1]);
+    if (!in) throw systole::InputError(std::string("cannot read '") + argv[1] + "'");
+    const double period_ms = std::stod(argv[2]);
+    if (!(period_ms > 0)) throw systole::InputError("PERIOD_MS must be > 0, got " + std::string(argv[2]));
+    std::vector<systole::Series> series;
+    std::string line, cell;
+    std::getline(in, line);
+    for (std::istringstream header(line); std::getline(header, cell, ',');) series.push_back({cell, "", {}});
+    for (std::size_t row = 2; std::getline(in, line); ++row) {
+      if (line.empty()) continue;
+      std::istringstream cells(line);
+      for (auto& s : series) {
+        if (!std::getline(cells, cell, ','))
+          throw systole::InputError("row " + std::to_string(row) + " has fewer cells than the header");
+        s.values.push_back(std::stod(cell));
+      }
+    }
+    for (const auto& beat : systole::scene::fsei_beat_metrics(series, period_ms, "fsi"))
+      std::printf("%s\n", nlohmann::json(beat).dump(2).c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fsei_beats: %s\n", e.what());
+    return 2;
+  }
+}
