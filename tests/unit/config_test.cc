@@ -2,6 +2,7 @@
 // consistency that keeps proto/systole/v1/scenario.proto and parameter_table.cc in step.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -223,5 +224,27 @@ TEST(Config, ParameterReferenceInDocsIsCurrent) {
   EXPECT_EQ(text.str(), parameters_markdown())
       << "regenerate: build/bin/systole-solve --list-parameters > docs/parameters.md";
 }
+// Every scenario in examples/ parses (the README and docs point users at them; campaign files,
+// with a "base_scenario", are the campaign tests' business), and the full heart's example is the
+// setting of the first whole beat in blood (docs/fsei.md, sessions 17-18: its checkpoint's
+// fingerprint matched this file's scenario).
+TEST(Config, EveryExampleScenarioParses) {
+  int parsed = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(SYSTOLE_SOURCE_DIR) + "/examples")) {
+    if (entry.path().extension() != ".json") continue;
+    std::ifstream in(entry.path());
+    const nlohmann::json doc = nlohmann::json::parse(in);
+    if (doc.contains("base_scenario")) continue;
+    EXPECT_NO_THROW(parse_scenario(doc)) << entry.path();
+    ++parsed;
+  }
+  EXPECT_GE(parsed, 10);
+  std::ifstream in(std::string(SYSTOLE_SOURCE_DIR) + "/examples/fsi_tight_beat.json");
+  const Scenario s = parse_scenario(nlohmann::json::parse(in));
+  EXPECT_EQ(s.scene, "fsi");
+  EXPECT_EQ(s.fsei.forcing_kernel, "divergence_free");
+  EXPECT_EQ(s.fluid.nz, 83);
+}
+
 }  // namespace
 }  // namespace systole::config
