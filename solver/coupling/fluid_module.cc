@@ -51,9 +51,10 @@ void FluidModule::set_body_nodes(int body, const std::vector<ibm::Vec3>& positio
   moved_ = true;
 }
 
-ibm::MarkerLoads FluidModule::loads() const {
+ibm::MarkerLoads FluidModule::loads(const std::vector<bool>& bodies) const {
   const fluid::Velocity& u = fluid_.velocity();
-  return ibm::compute_loads(forcing_.transfer(), {u.u, u.v, u.w}, fluid_.pressure(), fluid_.parameters().reynolds);
+  return ibm::compute_loads(forcing_.transfer(), {u.u, u.v, u.w}, fluid_.pressure(), fluid_.parameters().reynolds, {},
+                            bodies);
 }
 
 ibm::WallShear FluidModule::wall_shear() const {

@@ -65,8 +65,9 @@ class FluidModule final : public Module {
   // Input: a deformable body's node positions and velocities (grid units, sizes = the body's
   // tiled nodes; Markers::set_nodes checks them).
   void set_body_nodes(int body, const std::vector<ibm::Vec3>& position, const std::vector<ibm::Vec3>& velocity);
-  // Output: loads on every marker at the current state. Collective.
-  ibm::MarkerLoads loads() const;
+  // Output: loads on every marker at the current state; bodies: only these (by index; empty:
+  // all), the others 0 and not probed (ibm::compute_loads). Collective.
+  ibm::MarkerLoads loads(const std::vector<bool>& bodies = {}) const;
   // The wall shear stress (eq 27) extrapolated to the wall at every marker
   // (ibm::wall_shear_stress: twice the loads' probes, for output times). Collective.
   ibm::WallShear wall_shear() const;

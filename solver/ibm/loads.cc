@@ -3,6 +3,8 @@
 #include <mpi.h>
 
 #include <array>
+#include <stdexcept>
+#include <string>
 
 namespace systole::ibm {
 
@@ -56,15 +58,20 @@ struct ProbePoints {
   std::vector<Vec3> points;
   std::vector<std::ptrdiff_t> plus, minus;
 };
-ProbePoints probe_points(const Markers& markers, const std::vector<double>& distances) {
+// bodies: only the markers of these bodies (empty: every body's).
+ProbePoints probe_points(const Markers& markers, const std::vector<double>& distances,
+                         const std::vector<bool>& bodies = {}) {
   const MarkerArrays& m = markers.markers();
   const double h = markers.h();
+  if (!bodies.empty() && bodies.size() != markers.bodies().size())
+    throw std::invalid_argument("ibm loads: the body filter has " + std::to_string(bodies.size()) +
+                                " entries for " + std::to_string(markers.bodies().size()) + " bodies");
   ProbePoints out;
   out.plus.assign(m.size(), -1);
   out.minus.assign(m.size(), -1);
   out.points.reserve(distances.size() * m.size());
   for (std::size_t b = 0; b < m.size(); ++b) {
-    if (!markers.active(b)) continue;
+    if (!markers.active(b) || (!bodies.empty() && !bodies[m.body[b]])) continue;
     out.plus[b] = static_cast<std::ptrdiff_t>(out.points.size());
     for (double d : distances) out.points.push_back(m.surface[b] + d * h * m.normal[b]);
     if (markers.bodies()[m.body[b]].options.sides == Sides::two) {
@@ -78,13 +85,13 @@ ProbePoints probe_points(const Markers& markers, const std::vector<double>& dist
 }  // namespace
 
 MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
-                          double reynolds, const std::vector<Vec3>& acceleration) {
+                          double reynolds, const std::vector<Vec3>& acceleration, const std::vector<bool>& bodies) {
   const Markers& markers = transfer.markers();
   const MarkerArrays& m = markers.markers();
   const double h = markers.h();
   const std::size_t n = m.size();
   // Probes: "+" side for every active marker, "−" side for two-sided bodies.
-  const ProbePoints pp = probe_points(markers, {1.0});
+  const ProbePoints pp = probe_points(markers, {1.0}, bodies);
   const std::vector<std::ptrdiff_t>& plus = pp.plus;
   const std::vector<std::ptrdiff_t>& minus = pp.minus;
   const ProbeValues pv = probe(transfer, u, p, pp.points);

@@ -43,9 +43,13 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
                   const std::vector<Vec3>& points);
 
 // Loads on every marker of transfer.markers(). reynolds: τ = Re⁻¹(∇u + ∇uᵀ). acceleration: DV_b/Dt
-// per marker for eq 14 (empty: zero, fixed bodies). Halos of u and p must be valid. Collective.
+// per marker for eq 14 (empty: zero, fixed bodies). bodies: which bodies (by index) to load
+// (empty: all); the others are neither probed nor loaded (their entries 0, as inactive markers'),
+// e.g. a rigid body whose loads nothing uses. Halos of u and p must be valid. Collective: every
+// rank passes the same `bodies`.
 MarkerLoads compute_loads(const Transfer& transfer, const ConstVelocityView& u, const grid::CellField& p,
-                          double reynolds, const std::vector<Vec3>& acceleration = {});
+                          double reynolds, const std::vector<Vec3>& acceleration = {},
+                          const std::vector<bool>& bodies = {});
 
 // Wall shear stress (eq 27) extrapolated to the wall (ours): the viscous traction t = τ·n from
 // MLS at two probes, X_b + h n and X_b + 2h n (and the mirrored pair on the − side of two-sided

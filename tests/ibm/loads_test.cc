@@ -94,6 +94,40 @@ TEST(Loads, TwoSidedLoadsUseTheJumpAcrossTheSheet) {
   EXPECT_LT(worst, 1e-14);
 }
 
+// A body filter loads only the bodies asked for: their loads equal the unfiltered call's bitwise
+// (each marker's probes are its own), the others' are 0 and their nodes unloaded.
+TEST(Loads, ABodyFilterLoadsOnlyThoseBodiesAndTheSameLoads) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_WORLD);
+  Markers markers(kGrid);
+  BodyOptions one;
+  one.mm_per_unit = 1.0;
+  one.normals = ExpectedNormals::outward;
+  markers.add_body(sphere_mesh(Vec3(1, 1, 1), 0.4, 2), "sphere", one);
+  BodyOptions two;
+  two.mm_per_unit = 1.0;
+  two.sides = Sides::two;
+  markers.add_body(plate_with_hole_mesh(0.3, 0.3, 1.4, 1.0, 0.3, 3, 20), "plate", two);
+  const Transfer t(slabs, markers);
+  const LinearFlow f(slabs);
+  const MarkerLoads all = compute_loads(t, {f.u, f.v, f.w}, f.p, kRe);
+  const MarkerLoads plate = compute_loads(t, {f.u, f.v, f.w}, f.p, kRe, {}, {false, true});
+  std::size_t on_plate = 0;
+  for (std::size_t b = 0; b < markers.size(); ++b) {
+    if (markers.markers().body[b] == 1) {
+      ++on_plate;
+      EXPECT_EQ(plate.force[b], all.force[b]) << b;
+      EXPECT_EQ(plate.wall_pressure_minus[b], all.wall_pressure_minus[b]) << b;
+    } else {
+      EXPECT_EQ(plate.force[b], Vec3::Zero()) << b;
+      EXPECT_NE(all.force[b], Vec3::Zero()) << b;
+    }
+  }
+  EXPECT_GT(on_plate, 0u);
+  for (const Vec3& F : plate.nodal_force[0]) EXPECT_EQ(F, Vec3::Zero());
+  EXPECT_EQ(plate.nodal_force[1], all.nodal_force[1]);
+  EXPECT_THROW(compute_loads(t, {f.u, f.v, f.w}, f.p, kRe, {}, {true}), std::invalid_argument);
+}
+
 // A body that moves within a cell of a z wall is a WallProximityError (naming the point), not an
 // abort: the markers' rebuild checks every position alike on every rank, and the load probes
 // (threaded above kThreadedMarkers points) rethrow after their OpenMP loop.
