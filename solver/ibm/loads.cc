@@ -20,6 +20,13 @@ ProbeValues probe(const Transfer& transfer, const ConstVelocityView& u, const gr
   parallel_for_rethrow(static_cast<std::ptrdiff_t>(n), kThreadedMarkers, [&](std::ptrdiff_t qq) {
     const std::size_t q = static_cast<std::size_t>(qq);
     double* row = local.data() + 10 * q;
+    // A point none of whose four supports is centred on this rank's planes is only checked
+    // (every rank fails alike at a wall; its row stays 0 here): the full point with derivatives
+    // is built by its owners only (ours, for cost; the rows are the same bitwise).
+    if (!transfer.owns_plane(mls_k_centre_z_face(g, points[q])) && !transfer.owns_plane(mls_k_centre_cell(g, points[q]))) {
+      mls_check_point(g, points[q]);
+      return;
+    }
     // The four locations share their 1-D weights; φ and ∂φ are contracted with the fields
     // row by row (mls.h, mls_point / mls_contract).
     const MlsPoint P = mls_point(g, points[q], true);

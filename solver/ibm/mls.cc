@@ -280,6 +280,13 @@ void divergence_free_face_stencils(const grid::Grid& g, const Eigen::Vector3d& X
   }
 }
 
+void mls_check_point(const grid::Grid& g, const Eigen::Vector3d& X) {
+  Axis a;
+  const double xc = X[2] / g.dz(), inv = 1.0 / g.dz();
+  for (int centred = 0; centred < 2; ++centred)  // as axes<>() for d = 2
+    if (!axis<false>(xc, inv, centred ? 0.5 : 0.0, centred ? 0 : 1, g.nz() - 1, a)) singular(X);
+}
+
 MlsPoint mls_point(const grid::Grid& g, const Eigen::Vector3d& X, bool derivatives) {
   MlsPoint P;
   if (derivatives)

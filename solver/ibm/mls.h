@@ -122,6 +122,14 @@ struct MlsPoint {
 };
 // Throws std::logic_error like mls_stencil when a direction's moment is singular.
 MlsPoint mls_point(const grid::Grid& g, const Eigen::Vector3d& X, bool derivatives);
+// Throws what mls_point throws at X, and nothing else: only the z supports can be singular (x and
+// y are periodic), so this is two 1-D supports instead of six with derivatives. For ranks that do
+// not own X's planes but must fail alike (collective callers).
+void mls_check_point(const grid::Grid& g, const Eigen::Vector3d& X);
+// The centre planes (global k) of the z-face and of the other locations' supports at X: what
+// mls_k_centre gives for mls_point(g, X, ·), without building it.
+inline int mls_k_centre_z_face(const grid::Grid& g, const Eigen::Vector3d& X);
+inline int mls_k_centre_cell(const grid::Grid& g, const Eigen::Vector3d& X);
 
 // The centre plane (global k) of location L's support at the point (decides the owner rank).
 template <grid::Location L>
@@ -191,6 +199,8 @@ MlsGradientStencil mls_gradient_stencil(const grid::Grid& g, grid::Location L, c
 // The node nearest to v (v in cells, offset removed): round half away from zero, as std::lround
 // (inline, no libm call). The stencils' centre planes (ownership) use it.
 inline int mls_nearest(double v) { return v >= 0 ? static_cast<int>(v + 0.5) : -static_cast<int>(0.5 - v); }
+inline int mls_k_centre_z_face(const grid::Grid& g, const Eigen::Vector3d& X) { return mls_nearest(X[2] / g.dz()); }
+inline int mls_k_centre_cell(const grid::Grid& g, const Eigen::Vector3d& X) { return mls_nearest(X[2] / g.dz() - 0.5); }
 
 // The weight function w(r) (r ≥ 0) and its derivative.
 double mls_weight(double r);
