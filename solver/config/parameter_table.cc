@@ -588,6 +588,12 @@ std::vector<Param> build_table() {
                            "their carry-over (ours: the plane is the largest leak left; with MLS a cusp crumpled "
                            "next to it: docs/fsei.md sessions 12 and 16). The other bodies' markers next to the "
                            "plane carry none either way."));
+  t.push_back(SYSTOLE_CHOICE(fsei.slab_split, "balanced", (std::vector<std::string_view>{"balanced", "uniform"}),
+                             "Scenes 'fsei'/'fsi' on several MPI ranks: how the fluid's z planes are split over the "
+                             "ranks: balanced (ours), by each plane's work, its cells plus the immersed boundary's "
+                             "share in proportion to the bodies' surface in it (docs/benchmarks.md: with equal "
+                             "blocks one of 2 ranks waited half its time); uniform, equal blocks. Results agree to "
+                             "round-off; not part of a checkpoint's fingerprint."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "solver/core/errors.h"
 
@@ -49,7 +51,40 @@ Range block_range(int n, int parts, int p) {
   return {p * base + (p < extra ? p : extra), base + (p < extra ? 1 : 0)};
 }
 
-Slabs::Slabs(const Grid& grid, MPI_Comm comm) : grid_(grid) {
+std::vector<Range> weighted_ranges(const std::vector<double>& weights, int parts) {
+  const int n = static_cast<int>(weights.size());
+  if (parts < 1 || n < parts)
+    throw std::invalid_argument("weighted_ranges: " + std::to_string(n) + " items cannot be split into " +
+                                std::to_string(parts) + " non-empty parts");
+  std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const double w = weights[static_cast<std::size_t>(i)];
+    if (!(w >= 0) || !std::isfinite(w))
+      throw std::invalid_argument("weighted_ranges: weight " + std::to_string(i) + " = " + std::to_string(w) +
+                                  " must be finite and >= 0");
+    prefix[static_cast<std::size_t>(i) + 1] = prefix[static_cast<std::size_t>(i)] + w;
+  }
+  const double total = prefix.back();
+  if (!(total > 0)) throw std::invalid_argument("weighted_ranges: the weights' total must be > 0");
+  std::vector<Range> out(static_cast<std::size_t>(parts));
+  int begin = 0;
+  for (int p = 0; p < parts; ++p) {
+    int end = n;
+    if (p + 1 < parts) {
+      const double target = total * (p + 1) / parts;
+      // [begin + 1, n - (parts - p - 1)]: this part and every later one keep an item
+      end = begin + 1;
+      for (int b = begin + 2; b <= n - (parts - p - 1); ++b)
+        if (std::abs(prefix[static_cast<std::size_t>(b)] - target) < std::abs(prefix[static_cast<std::size_t>(end)] - target))
+          end = b;
+    }
+    out[static_cast<std::size_t>(p)] = {begin, end - begin};
+    begin = end;
+  }
+  return out;
+}
+
+Slabs::Slabs(const Grid& grid, MPI_Comm comm, const std::vector<double>& plane_weights) : grid_(grid) {
   MPI_Comm_dup(comm, &comm_);
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
@@ -60,7 +95,21 @@ Slabs::Slabs(const Grid& grid, MPI_Comm comm) : grid_(grid) {
       << "number of MPI ranks (" << size_ << "): every rank owns a z-slab and a y-slab";
     throw InputError(m.str());
   }
-  z_ = block_range(grid.nz(), size_, rank_);
+  if (!plane_weights.empty() && static_cast<int>(plane_weights.size()) != grid.nz()) {
+    MPI_Comm_free(&comm_);
+    throw std::invalid_argument("grid: " + std::to_string(plane_weights.size()) + " plane weights for nz = " +
+                                std::to_string(grid.nz()) + " planes");
+  }
+  try {
+    if (plane_weights.empty())
+      for (int r = 0; r < size_; ++r) z_ranges_.push_back(block_range(grid.nz(), size_, r));
+    else
+      z_ranges_ = weighted_ranges(plane_weights, size_);
+  } catch (...) {
+    MPI_Comm_free(&comm_);
+    throw;
+  }
+  z_ = z_ranges_[static_cast<std::size_t>(rank_)];
 }
 
 Slabs::~Slabs() {

@@ -61,13 +61,22 @@ struct Range {
   int begin = 0, count = 0;
 };
 Range block_range(int n, int parts, int p);
+// Contiguous split of weights.size() items over `parts` by weight (ours, for load balance): part
+// p ends at the item boundary whose prefix sum is nearest to p/parts of the total (the first such
+// boundary on a tie), every part keeping at least one item. Equal weights give block_range's
+// counts up to where the remainder goes. Throws std::invalid_argument for fewer items than parts,
+// a negative or non-finite weight, or a total that is not positive.
+std::vector<Range> weighted_ranges(const std::vector<double>& weights, int parts);
 
 // The slab decomposition in z of a Grid over an MPI communicator (duplicated: the slabs own a
 // private communicator, freed on destruction). Also the y-slab split used by transposes.
 // Throws InputError if a rank would own no z-slab or no y-slab (nz, ny < ranks).
+// plane_weights (optional, nz entries, the same on every rank): the z planes are split by
+// weighted_ranges instead of in equal blocks, e.g. by the work of the immersed bodies in each
+// plane (a body's markers are worked on by the rank owning their planes).
 class Slabs {
  public:
-  Slabs(const Grid& grid, MPI_Comm comm);
+  Slabs(const Grid& grid, MPI_Comm comm, const std::vector<double>& plane_weights = {});
   ~Slabs();
   Slabs(const Slabs&) = delete;
   Slabs& operator=(const Slabs&) = delete;
@@ -78,7 +87,7 @@ class Slabs {
   int size() const { return size_; }
   int k_begin() const { return z_.begin; }
   int k_count() const { return z_.count; }
-  Range z_range(int rank) const { return block_range(grid_.nz(), size_, rank); }
+  Range z_range(int rank) const { return z_ranges_.at(static_cast<std::size_t>(rank)); }
   Range y_range(int rank) const { return block_range(grid_.ny(), size_, rank); }
   bool owns_bottom_wall() const { return rank_ == 0; }
   bool owns_top_wall() const { return rank_ == size_ - 1; }
@@ -90,6 +99,7 @@ class Slabs {
   MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, size_ = 1;
   Range z_;
+  std::vector<Range> z_ranges_;  // every rank's
 };
 
 // A field on this rank's slab with one halo layer each side; local indices i ∈ [-1, nx],

@@ -29,13 +29,14 @@ std::string exact(double v) {
 
 // Parameters a continued run may change: they do not enter the trajectory.
 // What a continued run may change: the outputs, the run's length, the field and checkpoint
-// intervals, and the structure's strain limit (a guard that stops the run, not a parameter of the
+// intervals, the structure's strain limit (a guard that stops the run, not a parameter of the
 // trajectory: the pre-stress does not depend on it either, prestress.h), so a run stopped by it
-// resumes from its last checkpoint with a looser one.
+// resumes from its last checkpoint with a looser one, and the slabs' split over the ranks (like
+// the rank count: the trajectory to round-off).
 bool excluded(std::string_view path) {
   return path.rfind("outputs.", 0) == 0 || path == "beats" || path == "fsei.end_time_ms" ||
          path == "fsei.field_interval_ms" || path == "fsei.checkpoint_interval_ms" ||
-         path == "structure.strain_limit";
+         path == "structure.strain_limit" || path == "fsei.slab_split";
 }
 
 std::string entry_name(std::size_t k) { return std::string("e").append(std::to_string(k)); }

@@ -359,6 +359,20 @@ bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase) {
   return phase_ms < end_phase * period_ms - 1e-9;
 }
 
+std::vector<double> slab_plane_weights(const grid::Grid& g, const std::vector<double>& marker_z) {
+  if (marker_z.empty()) throw std::invalid_argument("slab_plane_weights: no markers");
+  std::vector<double> markers_in(static_cast<std::size_t>(g.nz()), 0.0);
+  for (double z : marker_z) {
+    if (!std::isfinite(z)) throw std::invalid_argument("slab_plane_weights: a marker's z is not finite");
+    const int k = std::clamp(static_cast<int>(std::floor(z / g.dz())), 0, g.nz() - 1);
+    markers_in[static_cast<std::size_t>(k)] += 1;
+  }
+  const double plane_cells = static_cast<double>(g.nx()) * g.ny(), n = static_cast<double>(marker_z.size());
+  std::vector<double> w(markers_in.size());
+  for (std::size_t k = 0; k < w.size(); ++k) w[k] = plane_cells * (1 + kIbToFluidWork * g.nz() * markers_in[k] / n);
+  return w;
+}
+
 RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   const bool with_ep = s.scene == "fsei";
   const config::Fsei& fs = s.fsei;
@@ -425,30 +439,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     }
   }
 
-  // 2. the fluid: blood at rest, the Darcy afterload around the end of the descending aorta
-  const grid::Slabs slabs(g, MPI_COMM_WORLD);
-  fluid::FluidParameters fp;
-  fp.reynolds = units::kSeedVelocity_m_s * units::kSeedLength_m / s.fluid.kinematic_viscosity_m2_per_s;
-  fp.cfl = s.fluid.cfl;
-  fp.max_dt = std::min(s.fluid.max_dt_ms, sync_ms) / kTimeScaleMs;
-  fp.darcy_permeability = s.fluid.darcy_permeability;
-  // A stable step below 1e-3 of the largest (velocities 1000x the design's) is a blow-up (ours:
-  // a run with 10 forcing passes crawled at 21 ms for ten minutes instead of stopping).
-  fp.abort_min_dt = 1e-3 * fp.max_dt;
-  {
-    const auto& o = heart.outflow;
-    // The cylinder's bounding box: its radius reaches r sqrt(1 - a_i^2) along axis i.
-    const Vec3 a = (o.end_mm - o.start_mm).normalized();
-    Vec3 pad;
-    for (int i = 0; i < 3; ++i) pad[i] = o.radius_mm * std::sqrt(std::max(0.0, 1 - a[i] * a[i]));
-    const Vec3 lo = o.start_mm.cwiseMin(o.end_mm) - pad;
-    const Vec3 hi = o.start_mm.cwiseMax(o.end_mm) + pad;
-    fp.darcy_regions.push_back({lo.x() / kDmMm, hi.x() / kDmMm, lo.y() / kDmMm, hi.y() / kDmMm, lo.z() / kDmMm,
-                                hi.z() / kDmMm});
-  }
-  fluid::FluidSolver fluid(slabs, fp);
 
-  // 3. the shells of the deformable bodies (the chamber walls as in scene electromechanics)
+  // 2. the shells of the deformable bodies (the chamber walls as in scene electromechanics)
   const config::Electromechanics& em = s.electromechanics;
   const structure::ShellMaterials materials = chamber_wall_materials(s);
   const structure::ShellOptions wall = chamber_wall_options(s, heart.plane.z_mm);
@@ -530,24 +522,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       l0[k] = aorta_built_rest_mm[k] + r * (aorta_prestress_rest_mm[k] - aorta_built_rest_mm[k]);
     return l0;
   };
-  double aorta_initial_ml = 0;  // the volume started at the ground pressure (a note)
-  if (fs.aortic_pressure_mmhg > 0 && fs.aortic_pressure_ramp_ms == 0) {
-    const geometry::TriMesh& aorta = heart.body(geometry::kAortaBody);
-    const AortaInterior interior(aorta, heart.plane, 0.75 * s.geometry.aortic_root_diameter_mm);
-    const double p0 = fs.aortic_pressure_mmhg * units::kPaPerMmHg /
-                      (s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s);
-    long inside_cells = 0;
-    fluid.set_pressure([&](double x, double y, double z) {
-      if (!interior.inside(Vec3(x, y, z) * kDmMm)) return 0.0;
-      ++inside_cells;
-      return p0;
-    });
-    long all = 0;
-    MPI_Allreduce(&inside_cells, &all, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
-    aorta_initial_ml = static_cast<double>(all) * g.dx() * g.dy() * g.dz() * kDmMm * kDmMm * kDmMm * kMlPerMm3;
-  }
 
-  // 4. the markers: the rigid valvular plane, every deformable body (the LA wall and its vein
+  // 3. the markers: the rigid valvular plane, every deformable body (the LA wall and its vein
   //    caps separately); one-sided loads from the blood inside the chambers and the aorta,
   //    two-sided on the leaflets and the caps
   ibm::Markers markers(g);
@@ -602,6 +578,54 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       link(mesh, name, b, mesh.kind == geometry::BodyKind::kLeaflet, false);
     }
   }
+  // 4. the fluid: blood at rest, the Darcy afterload around the end of the descending aorta,
+  //    on slabs split by the planes' work (fsei.slab_split = "balanced", ours: the immersed
+  //    boundary's work sits where the markers are; with equal blocks one of 2 ranks waited half its
+  //    time), so built after the markers
+  if (fs.slab_split != "balanced" && fs.slab_split != "uniform")
+    throw InputError("fsei.slab_split = \"" + fs.slab_split + "\" is not one of: balanced, uniform");
+  std::vector<double> marker_z(markers.size());
+  for (std::size_t q = 0; q < markers.size(); ++q) marker_z[q] = markers.markers().position[q].z();
+  const grid::Slabs slabs(g, MPI_COMM_WORLD, fs.slab_split == "balanced" ? slab_plane_weights(g, marker_z) : std::vector<double>{});
+  fluid::FluidParameters fp;
+  fp.reynolds = units::kSeedVelocity_m_s * units::kSeedLength_m / s.fluid.kinematic_viscosity_m2_per_s;
+  fp.cfl = s.fluid.cfl;
+  fp.max_dt = std::min(s.fluid.max_dt_ms, sync_ms) / kTimeScaleMs;
+  fp.darcy_permeability = s.fluid.darcy_permeability;
+  // A stable step below 1e-3 of the largest (velocities 1000x the design's) is a blow-up (ours:
+  // a run with 10 forcing passes crawled at 21 ms for ten minutes instead of stopping).
+  fp.abort_min_dt = 1e-3 * fp.max_dt;
+  {
+    const auto& o = heart.outflow;
+    // The cylinder's bounding box: its radius reaches r sqrt(1 - a_i^2) along axis i.
+    const Vec3 a = (o.end_mm - o.start_mm).normalized();
+    Vec3 pad;
+    for (int i = 0; i < 3; ++i) pad[i] = o.radius_mm * std::sqrt(std::max(0.0, 1 - a[i] * a[i]));
+    const Vec3 lo = o.start_mm.cwiseMin(o.end_mm) - pad;
+    const Vec3 hi = o.start_mm.cwiseMax(o.end_mm) + pad;
+    fp.darcy_regions.push_back({lo.x() / kDmMm, hi.x() / kDmMm, lo.y() / kDmMm, hi.y() / kDmMm, lo.z() / kDmMm,
+                                hi.z() / kDmMm});
+  }
+  fluid::FluidSolver fluid(slabs, fp);
+
+  // The blood inside the aorta starts at the ground pressure (step 2's comment), unless ramped.
+  double aorta_initial_ml = 0;  // the volume started at the ground pressure (a note)
+  if (fs.aortic_pressure_mmhg > 0 && fs.aortic_pressure_ramp_ms == 0) {
+    const geometry::TriMesh& aorta = heart.body(geometry::kAortaBody);
+    const AortaInterior interior(aorta, heart.plane, 0.75 * s.geometry.aortic_root_diameter_mm);
+    const double p0 = fs.aortic_pressure_mmhg * units::kPaPerMmHg /
+                      (s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s);
+    long inside_cells = 0;
+    fluid.set_pressure([&](double x, double y, double z) {
+      if (!interior.inside(Vec3(x, y, z) * kDmMm)) return 0.0;
+      ++inside_cells;
+      return p0;
+    });
+    long all = 0;
+    MPI_Allreduce(&inside_cells, &all, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+    aorta_initial_ml = static_cast<double>(all) * g.dx() * g.dy() * g.dz() * kDmMm * kDmMm * kDmMm * kMlPerMm3;
+  }
+
   ibm::ForcingParameters forcing_parameters;
   forcing_parameters.carry_over = fs.forcing_carry_over;
   forcing_parameters.carry_over_factor = fs.forcing_carry_over_factor;
@@ -1260,6 +1284,22 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     result.notes.push_back("resumed from a checkpoint without the wall-slip series: lv_wall_slip_flux_ml_s, "
                            "aorta_wall_slip_flux_ml_s, valvular_plane_slip_flux_ml_s, lv_wall_slip_volume_ml and "
                            "valvular_plane_slip_volume_ml are not reported");
+  }
+  if (slabs.size() > 1) {
+    std::ostringstream m;
+    m << "the fluid's " << g.nz() << " z planes over " << slabs.size() << " ranks (fsei.slab_split = " << fs.slab_split
+      << "):";
+    for (int r = 0; r < slabs.size(); ++r) {
+      const grid::Range z = slabs.z_range(r);
+      long in = 0;
+      for (double mz : marker_z) {
+        const int k = std::clamp(static_cast<int>(std::floor(mz / g.dz())), 0, g.nz() - 1);
+        in += k >= z.begin && k < z.begin + z.count;
+      }
+      m << (r ? "," : "") << " rank " << r << " planes [" << z.begin << ", " << z.begin + z.count << ") with " << in
+        << " of the " << marker_z.size() << " markers at rest";
+    }
+    result.notes.push_back(m.str());
   }
   if (!outlet_series)
     result.notes.push_back(std::abs(outflow_axis.z()) > 0.99

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "solver/config/scenario.h"
+#include "solver/grid/grid.h"
 #include "solver/core/run_result.h"
 #include "solver/scene/scene.h"
 
@@ -68,5 +69,13 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
 // read as the scene's intervals are clipped, so a time within 1e-9 ms below a beat's start is
 // that beat's start (the limiter holds) and the window's end belongs to the released part.
 bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase);
+
+// The work of each z plane of grid g for fsei.slab_split = "balanced" (grid::Slabs'
+// plane_weights; nz entries): its cells (the fluid) plus kIbToFluidWork times the whole grid's
+// cells in proportion to the share of the markers in the plane (by their z: the immersed
+// boundary works per marker on the rank owning its plane). marker_z in grid units; throws
+// std::invalid_argument for none or a non-finite one.
+inline constexpr double kIbToFluidWork = 12;  // (ours) perf in the heart, docs/benchmarks.md, session 18
+std::vector<double> slab_plane_weights(const grid::Grid& g, const std::vector<double>& marker_z);
 
 }  // namespace systole::scene

@@ -16,6 +16,7 @@
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
 #include "solver/geometry/left_heart.h"
+#include "solver/grid/grid.h"
 #include "solver/diagnostics/phase_average.h"
 #include "solver/scene/fsei_checkpoint.h"
 #include "solver/scene/fsei_fields.h"
@@ -200,6 +201,30 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
 // The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
 // off after, on again at the next beat's start, also at a time a rounding below it; always
 // with end 1.
+// fsei.slab_split = "balanced": a plane's work is its cells plus kIbToFluidWork x the grid's
+// cells x its share of the markers; split by it, two ranks get equal work to a plane's, while
+// equal blocks leave the markers' side with most of it.
+TEST(FseiScene, TheBalancedSlabsShareTheMarkersWork) {
+  const grid::Grid g({16, 16, 40, 1, 1, 4});  // dz = 0.1
+  std::vector<double> z;
+  for (int q = 0; q < 3000; ++q) z.push_back(0.05 + 0.1 * (q % 10));  // markers in planes 0-9 only
+  const std::vector<double> w = slab_plane_weights(g, z);
+  ASSERT_EQ(w.size(), 40u);
+  const double cells = 16.0 * 16.0;
+  EXPECT_DOUBLE_EQ(w[0], cells * (1 + kIbToFluidWork * 40 * 0.1));  // 300 of 3000 markers
+  EXPECT_DOUBLE_EQ(w[39], cells);
+  double total = 0, largest = 0;
+  for (double x : w) total += x, largest = std::max(largest, x);
+  EXPECT_NEAR(total, cells * 40 * (1 + kIbToFluidWork), 1e-9 * total);
+  const std::vector<grid::Range> r = grid::weighted_ranges(w, 2);
+  double first = 0;
+  for (int k = 0; k < r[0].count; ++k) first += w[static_cast<std::size_t>(k)];
+  EXPECT_NEAR(first / total, 0.5, largest / total);
+  EXPECT_LT(r[0].count, 10);  // the markers' planes are shared; the fluid's go to the other rank
+  EXPECT_THROW(slab_plane_weights(g, {}), std::invalid_argument);
+  EXPECT_THROW(slab_plane_weights(g, {0.5, std::nan("")}), std::invalid_argument);
+}
+
 TEST(FseiScene, TheMitralLimiterHoldsOverItsWindowOfEveryBeat) {
   const double T = 857.142857142857;  // 70 bpm
   EXPECT_TRUE(mitral_limiter_holds(0, T, 0.4));

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <vector>
 
 #include "solver/fluid/fluid.h"
 #include "solver/grid/field_io.h"
@@ -18,11 +19,11 @@ constexpr double kPi = std::numbers::pi;
 struct FluidRun {
   grid::Slabs slabs;
   FluidSolver fluid;
-  FluidRun(MPI_Comm comm, const FluidParameters& p)
-      : slabs(grid::Grid({16, 12, 10, 2 * kPi, 2 * kPi, kPi}), comm), fluid(slabs, p) {}
+  FluidRun(MPI_Comm comm, const FluidParameters& p, const std::vector<double>& plane_weights = {})
+      : slabs(grid::Grid({16, 12, 10, 2 * kPi, 2 * kPi, kPi}), comm, plane_weights), fluid(slabs, p) {}
 };
 
-void compare_one_and_two_ranks(const FluidParameters& p, const char* what);
+void compare_one_and_two_ranks(const FluidParameters& p, const char* what, const std::vector<double>& weights = {});
 
 TEST(Decomposition, OneAndTwoRanksGiveTheSameFields) {
   FluidParameters p;
@@ -38,7 +39,21 @@ TEST(Decomposition, OneAndTwoRanksGiveTheSameFieldsShearThinning) {
   compare_one_and_two_ranks(p, "carreau_yasuda");
 }
 
-void compare_one_and_two_ranks(const FluidParameters& parameters, const char* what) {
+// Slabs split by weight (grid::weighted_ranges, fsei.slab_split = "balanced"): 2 ranks own 8
+// and 2 of the 10 planes; the transposes, halos and walls still give the one-rank fields.
+TEST(Decomposition, UnevenSlabsGiveTheSameFields) {
+  const std::vector<double> weights{1, 1, 1, 1, 1, 1, 1, 5, 5, 5};
+  const grid::Slabs probe(grid::Grid({16, 12, 10, 2 * kPi, 2 * kPi, kPi}), MPI_COMM_WORLD, weights);
+  if (probe.size() == 2) {
+    EXPECT_EQ(probe.z_range(0).count, 8);
+    EXPECT_EQ(probe.z_range(1).count, 2);
+  }
+  FluidParameters p;
+  p.reynolds = 500;
+  compare_one_and_two_ranks(p, "uneven slabs", weights);
+}
+
+void compare_one_and_two_ranks(const FluidParameters& parameters, const char* what, const std::vector<double>& weights) {
   FluidParameters p = parameters;
   p.top_wall.velocity_x = 0.3;  // no-slip, moving: exercises the wall ghosts and the body force
   p.darcy_regions.push_back({0, 2 * kPi, 0, 2 * kPi, 1.0, 1.5});
@@ -50,7 +65,7 @@ void compare_one_and_two_ranks(const FluidParameters& parameters, const char* wh
       for (int j = 0; j < f.u.ny(); ++j)
         for (int i = 0; i < f.u.nx(); ++i) f.u(i, j, k) = 0.1 * std::cos(c.time + 0.3 * j + 0.1 * (f.u.k_begin() + k));
   };
-  FluidRun world(MPI_COMM_WORLD, p), self(MPI_COMM_SELF, p);
+  FluidRun world(MPI_COMM_WORLD, p, weights), self(MPI_COMM_SELF, p);
   for (FluidRun* r : {&world, &self}) {
     r->fluid.set_body_force(force);
     r->fluid.set_velocity(u0, v0, w0);

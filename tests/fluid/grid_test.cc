@@ -1,7 +1,10 @@
 // Unit tier: grid geometry, location types, block split, halos.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <stdexcept>
 #include <type_traits>
+#include <vector>
 
 #include "solver/core/errors.h"
 #include "solver/grid/grid.h"
@@ -39,6 +42,42 @@ TEST(Grid, BlockRangesCoverEverythingOnce) {
     next += r.count;
   }
   EXPECT_EQ(next, 145);
+}
+
+// The split by weight (fsei.slab_split = "balanced"): contiguous, covering, every part non-empty,
+// each boundary the one nearest its share of the total; equal weights give equal blocks.
+TEST(Grid, WeightedRangesSplitByWeight) {
+  auto check_cover = [](const std::vector<Range>& r, int n) {
+    int next = 0;
+    for (const Range& x : r) {
+      EXPECT_EQ(x.begin, next);
+      EXPECT_GE(x.count, 1);
+      next += x.count;
+    }
+    EXPECT_EQ(next, n);
+  };
+  const std::vector<Range> even = weighted_ranges(std::vector<double>(12, 2.5), 3);
+  check_cover(even, 12);
+  for (const Range& x : even) EXPECT_EQ(x.count, 4);
+  // 20 light planes then 10 planes 9x heavier (total 110): halves at 55 -> after plane 23
+  // (20 + 3 x 9 = 47) or 24 (56): 24 is nearer
+  std::vector<double> heavy(20, 1.0);
+  heavy.insert(heavy.end(), 10, 9.0);
+  const std::vector<Range> two = weighted_ranges(heavy, 2);
+  check_cover(two, 30);
+  EXPECT_EQ(two[0].count, 24);
+  // all the weight in the first plane: every later part still gets a plane
+  std::vector<double> spike(5, 0.0);
+  spike[0] = 1;
+  const std::vector<Range> four = weighted_ranges(spike, 4);
+  check_cover(four, 5);
+  EXPECT_EQ(four[0].count, 1);
+  EXPECT_THROW(weighted_ranges({1, 1}, 3), std::invalid_argument);
+  EXPECT_THROW(weighted_ranges({1, -1, 1}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_ranges({0, 0, 0}, 2), std::invalid_argument);
+  EXPECT_THROW(weighted_ranges({1, std::nan(""), 1}, 2), std::invalid_argument);
+  const Grid g({4, 3, 6, 1, 1, 1});
+  EXPECT_THROW(Slabs(g, MPI_COMM_SELF, {1, 1, 1}), std::invalid_argument);  // not nz weights
 }
 
 TEST(Grid, HalosArePeriodicInXAndY) {
