@@ -74,16 +74,7 @@ double value_at(std::span<const double> time_s, std::span<const double> values, 
 
 std::optional<double> first_crossing(std::span<const double> time_s, std::span<const double> values,
                                      double level, Crossing direction) {
-  check_same_size(time_s, values, "values");
-  for (size_t i = 1; i < values.size(); ++i) {
-    const double a = values[i - 1], b = values[i];
-    const bool hit =
-        direction == Crossing::kUpward ? (a <= level && b > level) : (a > level && b <= level);
-    if (!hit) continue;
-    const double s = (level - a) / (b - a);  // b != a because the inequalities are strict
-    return time_s[i - 1] + s * (time_s[i] - time_s[i - 1]);
-  }
-  return std::nullopt;
+  return first_lasting_crossing(time_s, values, level, direction, 0.0);  // no dwell: the first crossing
 }
 
 std::optional<double> first_lasting_crossing(std::span<const double> time_s, std::span<const double> values,

@@ -359,13 +359,19 @@ bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase) {
   return phase_ms < end_phase * period_ms - 1e-9;
 }
 
+namespace {
+// The z plane (cell layer) holding a point at z (grid units), clamped into the grid.
+int plane_of(const grid::Grid& g, double z) {
+  return std::clamp(static_cast<int>(std::floor(z / g.dz())), 0, g.nz() - 1);
+}
+}  // namespace
+
 std::vector<double> slab_plane_weights(const grid::Grid& g, const std::vector<double>& marker_z) {
   if (marker_z.empty()) throw std::invalid_argument("slab_plane_weights: no markers");
   std::vector<double> markers_in(static_cast<std::size_t>(g.nz()), 0.0);
   for (double z : marker_z) {
     if (!std::isfinite(z)) throw std::invalid_argument("slab_plane_weights: a marker's z is not finite");
-    const int k = std::clamp(static_cast<int>(std::floor(z / g.dz())), 0, g.nz() - 1);
-    markers_in[static_cast<std::size_t>(k)] += 1;
+    markers_in[static_cast<std::size_t>(plane_of(g, z))] += 1;
   }
   const double plane_cells = static_cast<double>(g.nx()) * g.ny(), n = static_cast<double>(marker_z.size());
   std::vector<double> w(markers_in.size());
@@ -1293,7 +1299,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       const grid::Range z = slabs.z_range(r);
       long in = 0;
       for (double mz : marker_z) {
-        const int k = std::clamp(static_cast<int>(std::floor(mz / g.dz())), 0, g.nz() - 1);
+        const int k = plane_of(g, mz);
         in += k >= z.begin && k < z.begin + z.count;
       }
       m << (r ? "," : "") << " rank " << r << " planes [" << z.begin << ", " << z.begin + z.count << ") with " << in
