@@ -594,6 +594,12 @@ std::vector<Param> build_table() {
                              "share in proportion to the bodies' surface in it (docs/benchmarks.md: with equal "
                              "blocks one of 2 ranks waited half its time); uniform, equal blocks. Results agree to "
                              "round-off; not part of a checkpoint's fingerprint."));
+  t.push_back(SYSTOLE_CHOICE(fsei.sync_interval, "fixed", (std::vector<std::string_view>{"fixed", "fluid_step"}),
+                             "Scenes 'fsei'/'fsi': the synchronisation intervals: fixed, fsei.sync_step_ms each; "
+                             "fluid_step (ours), each the fluid's stable (CFL) step at its start, at most "
+                             "fsei.sync_step_ms, so the fluid takes one step per interval and coupling pass instead "
+                             "of filling a fixed interval with one or two (docs/benchmarks.md: with strong coupling "
+                             "the passes repeat the fluid's steps)."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "

@@ -35,6 +35,7 @@ void validate(const SchedulerOptions& o) {
     range("relaxation_factor", o.relaxation_factor, "(0, 1]");
   if (o.iqn_reuse_intervals < 0) range("iqn_reuse_intervals", o.iqn_reuse_intervals, "[0, inf)");
   if (!(o.iqn_filter > 0 && o.iqn_filter < 1)) range("iqn_filter", o.iqn_filter, "(0, 1)");
+  if (o.interval_stage < -1) range("interval_stage", o.interval_stage, "-1 (fixed intervals) or a stage index");
   if (!(o.min_step_ms > 0)) range("min_step_ms", o.min_step_ms, "(0, inf)");
   if (!(o.step_limit_factor > 0) || !std::isfinite(o.step_limit_factor))
     range("step_limit_factor", o.step_limit_factor, "(0, inf)");
@@ -46,6 +47,9 @@ Scheduler::Scheduler(std::vector<Stage> stages, SchedulerOptions options)
   if (stages_.empty()) throw std::invalid_argument("Scheduler: no stages");
   for (const Stage& s : stages_)
     if (s.module == nullptr) throw std::invalid_argument("Scheduler: a stage has no module");
+  if (options_.interval_stage >= static_cast<int>(stages_.size()))
+    throw InputError("coupling option interval_stage = " + std::to_string(options_.interval_stage) +
+                     " is out of range: there are " + std::to_string(stages_.size()) + " stages (or -1: fixed intervals)");
   time_ms_ = stages_.front().module->time_ms();
   for (const Stage& s : stages_) {
     if (std::abs(s.module->time_ms() - time_ms_) > 1e-9 * std::max(1.0, std::abs(time_ms_)))
@@ -324,8 +328,19 @@ void Scheduler::advance_to(double t_ms) {
   const double landing = 1e-12 * std::max(1.0, std::abs(t_ms));
   while (t_ms - time_ms_ > landing) {
     const double left = t_ms - time_ms_;
-    const double intervals = std::ceil(left / options_.sync_step_ms * (1 - 1e-12));
-    const double t_end = intervals <= 1 ? t_ms : time_ms_ + options_.sync_step_ms;
+    double t_end = 0;
+    if (options_.interval_stage < 0) {
+      const double intervals = std::ceil(left / options_.sync_step_ms * (1 - 1e-12));
+      t_end = intervals <= 1 ? t_ms : time_ms_ + options_.sync_step_ms;
+    } else {
+      // The stage's stable step now (a collapsing or non-finite one is sub_cycle's to diagnose:
+      // the interval then stays at sync_step_ms and the stage's substeps report it).
+      const double limit = stages_[static_cast<std::size_t>(options_.interval_stage)].module->max_step_ms();
+      const double step = limit >= options_.min_step_ms && std::isfinite(limit) ? std::min(options_.sync_step_ms, limit)
+                                                                                 : options_.sync_step_ms;
+      const double intervals = std::ceil(left / step * (1 - 1e-12));
+      t_end = intervals <= 1 ? t_ms : time_ms_ + left / intervals;
+    }
     if (options_.mode == CouplingMode::loose) {
       run_pass(t_end, -1);
     } else {

@@ -50,6 +50,11 @@ enum class Relaxation { none, constant, aitken, iqn_ils };
 
 struct SchedulerOptions {
   double sync_step_ms = 1.0;              // Δt_sync, > 0
+  // >= 0 (ours): the intervals follow that stage's stable step: each is at most the stage's
+  // max_step_ms() at its start (and at most sync_step_ms), the time to the target split evenly,
+  // so the stage takes one step per interval and pass (the coupling at the fluid's own CFL step
+  // instead of a fixed Δt_sync that the fluid fills with one or two steps). -1: fixed intervals.
+  int interval_stage = -1;
   CouplingMode mode = CouplingMode::loose;
   double strong_tolerance = 1e-4;         // relative change of the transferred data
   int strong_max_iterations = 4;          // passes per interval, >= 1
@@ -94,7 +99,8 @@ class Scheduler {
 
   double time_ms() const { return time_ms_; }
   // Advances every module to t_ms (>= time_ms()) in synchronisation intervals of
-  // sync_step_ms (the last one shortened to land on t_ms). Throws what the modules throw
+  // sync_step_ms (the last one shortened to land on t_ms; or following interval_stage's step,
+  // above). Throws what the modules throw
   // (InstabilityError names the module), and InstabilityError("coupling", ...) when a module's
   // reported step falls below min_step_ms or is not finite.
   void advance_to(double t_ms);

@@ -135,6 +135,7 @@ BodyGroup::BodyGroup(std::vector<ShellModel> bodies, const ContactOptions& optio
   row_.resize(nb);
   area_.resize(nb);
   x_build_.resize(nb);
+  hash_.resize(nb);
   for (std::size_t k = 0; k < nb; ++k) {
     force_[k].assign(bodies_[k].node_count(), Vec3::Zero());
     row_[k].assign(bodies_[k].node_count(), 0.0);
@@ -197,27 +198,36 @@ void BodyGroup::build_candidates(Pair& pair, const std::vector<Vec3>& xa, const 
   }
 }
 
-// The candidate lists hold every triangle within d_c + skin of a node at the last build; they
-// stay complete for d_c while no node of either body has moved more than skin / 2 since then.
+// The candidate lists of a pair (a, b) hold every triangle of b within d_c + skin of a node of a,
+// from a's and b's positions at their own last builds; they stay complete for d_c while no node
+// of a and no node of b has moved more than skin / 2 since. So only the bodies of which a node
+// moved that far are re-hashed, and only the pairs they belong to rebuilt (ours: a fluttering
+// leaflet does not re-hash the LV).
 void BodyGroup::maybe_rebuild() {
   if (pairs_.empty()) return;
   const double lim2 = 0.25 * options_.skin_mm * options_.skin_mm;
-  bool rebuild = false;
-  for (std::size_t k = 0; k < bodies_.size() && !rebuild; ++k) {
+  std::vector<char> moved(bodies_.size(), 0);
+  bool any = false;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
     const auto& x = bodies_[k].positions_mm();
     for (std::size_t i = 0; i < x.size(); ++i)
-      if ((x[i] - x_build_[k][i]).squaredNorm() > lim2) {
-        rebuild = true;
+      if (!((x[i] - x_build_[k][i]).squaredNorm() <= lim2)) {
+        moved[k] = 1;
+        any = true;
         break;
       }
   }
-  if (!rebuild) return;
-  for (std::size_t k = 0; k < bodies_.size(); ++k) x_build_[k] = bodies_[k].positions_mm();
-  std::vector<TriangleHash> hash;
-  for (std::size_t k = 0; k < bodies_.size(); ++k)
-    hash.push_back(hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
+  if (!any) return;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    if (!moved[k]) continue;
+    x_build_[k] = bodies_[k].positions_mm();
+    hash_[k] = std::make_shared<const TriangleHash>(
+        hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
+    ++stats_.body_rebuilds;
+  }
   for (Pair& p : pairs_) {
-    build_candidates(p, x_build_[p.a], hash[p.b]);
+    if (!moved[p.a] && !moved[p.b]) continue;
+    build_candidates(p, x_build_[p.a], *hash_[p.b]);
     // A node with no candidate is farther than d_c + skin from b: its side is forgotten (it
     // will be recorded again, from at least d_c away, before it can enter the layer).
     for (std::size_t i = 0; i < p.side.size(); ++i)
@@ -227,9 +237,10 @@ void BodyGroup::maybe_rebuild() {
 }
 
 void BodyGroup::evaluate_contact() {
-  const long builds = stats_.candidate_builds;
+  const long builds = stats_.candidate_builds, body_rebuilds = stats_.body_rebuilds;
   stats_ = ContactStats{};
   stats_.candidate_builds = builds;
+  stats_.body_rebuilds = body_rebuilds;
   for (const Pair& p : pairs_) stats_.candidates += static_cast<long>(p.tri.size());
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
     std::fill(force_[k].begin(), force_[k].end(), Vec3::Zero());
@@ -323,11 +334,11 @@ void BodyGroup::import_state(const StateArchive& a, const std::string& prefix) {
   if (!pairs_.empty()) {
     for (std::size_t k = 0; k < x_build_.size(); ++k)
       x_build_[k] = a.get_vectors<Vec3>(prefix + bodies_[k].name() + "/x_build_mm", static_cast<long>(bodies_[k].node_count()));
-    std::vector<TriangleHash> hash;
     for (std::size_t k = 0; k < bodies_.size(); ++k)
-      hash.push_back(hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
+      hash_[k] = std::make_shared<const TriangleHash>(
+          hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
     for (std::size_t p = 0; p < pairs_.size(); ++p) {
-      build_candidates(pairs_[p], x_build_[pairs_[p].a], hash[pairs_[p].b]);
+      build_candidates(pairs_[p], x_build_[pairs_[p].a], *hash_[pairs_[p].b]);
       const std::vector<double>& side =
           a.get(prefix + "pair_" + std::to_string(p) + "/side", static_cast<long>(pairs_[p].side.size()));
       for (std::size_t i = 0; i < side.size(); ++i) pairs_[p].side[i] = static_cast<std::int8_t>(side[i]);

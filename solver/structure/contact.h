@@ -24,6 +24,7 @@
 // Pairs that are already within d_c in the stress-free meshes (shared annulus, commissures)
 // are excluded for that node and body.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "solver/core/state_archive.h"
@@ -60,6 +61,8 @@ struct ContactStats {
   double min_gap_mm = 1e300;   // smallest g over the active pairs
   double energy_uj = 0;        // sum of the penalty energies
   long candidate_builds = 0;   // rebuilds of the candidate lists so far
+  long body_rebuilds = 0;      // bodies re-hashed in those rebuilds (only those that moved; this
+                               // process's count: not kept in checkpoints)
   long candidates = 0;         // node-triangle candidates in the current lists (all pairs)
   long evaluated_nodes = 0;    // nodes whose closest point was computed at the last evaluation
   int shared_cells = 0;        // kCellAverage: cells holding nodes of several bodies (last substep)
@@ -136,7 +139,9 @@ class BodyGroup {
   ContactOptions options_;
   std::vector<Pair> pairs_;
   std::vector<std::vector<double>> area_;       // lumped stress-free node areas
-  std::vector<std::vector<Vec3>> x_build_;      // positions at the last candidate build
+  std::vector<std::vector<Vec3>> x_build_;      // per body: positions at its last candidate build
+  // Per body: its triangles hashed at x_build_ (immutable once built, so copies of the group share them)
+  std::vector<std::shared_ptr<const TriangleHash>> hash_;
   std::vector<std::vector<Vec3>> force_;        // contact forces per body
   std::vector<std::vector<double>> row_;        // contact stiffness rows per body
   ContactStats stats_;

@@ -53,6 +53,14 @@ class Collapsing final : public Module {
   double t_ = 0, limit_ = 0.1;
 };
 
+// Every module and the scheduler at t_ms, and no step above the varying module's own limit.
+void expect_landed_within_limits(const Scheduler& scheduler, const VaryingLimit& fast, const Module& slow, double t_ms) {
+  EXPECT_NEAR(scheduler.time_ms(), t_ms, 1e-12);
+  EXPECT_NEAR(fast.time_ms(), t_ms, 1e-12);
+  EXPECT_NEAR(slow.time_ms(), t_ms, 1e-12);
+  EXPECT_LE(fast.worst_ratio, 1 + 1e-12);
+}
+
 TEST(Scheduler, SubCyclingLandsOnTheEndTimeAndNeverExceedsTheLimit) {
   VaryingLimit fast;
   Oscillator slow("slow", 1, 1, 0, 1, 0.45);  // limit 0.9 ms
@@ -60,10 +68,7 @@ TEST(Scheduler, SubCyclingLandsOnTheEndTimeAndNeverExceedsTheLimit) {
   options.sync_step_ms = 0.7;
   Scheduler scheduler({{&fast, {}}, {&slow, {}}}, options);
   scheduler.advance_to(10.3);
-  EXPECT_NEAR(scheduler.time_ms(), 10.3, 1e-12);
-  EXPECT_NEAR(fast.time_ms(), 10.3, 1e-12);
-  EXPECT_NEAR(slow.time_ms(), 10.3, 1e-12);
-  EXPECT_LE(fast.worst_ratio, 1 + 1e-12);
+  expect_landed_within_limits(scheduler, fast, slow, 10.3);
   EXPECT_LE(scheduler.stats().modules[0].max_step_over_limit, 1 + 1e-12);
   EXPECT_LE(scheduler.stats().modules[1].max_step_over_limit, 1 + 1e-12);
   // 15 intervals (14 of 0.7 ms and one of 0.5 ms); the slow module needs one substep each.
@@ -74,6 +79,43 @@ TEST(Scheduler, SubCyclingLandsOnTheEndTimeAndNeverExceedsTheLimit) {
   EXPECT_GE(fast.steps, 15 * 5);
   EXPECT_GT(scheduler.stats().modules[0].min_step_ms, 0.025);
   EXPECT_EQ(scheduler.stats().modules[0].steps, fast.steps);
+}
+
+// interval_stage: the intervals follow a stage's stable step, so that stage takes exactly one
+// step per interval (and per pass with strong coupling), never above its limit, and the run
+// lands on the target; the other stages sub-cycle as before.
+TEST(Scheduler, IntervalsFollowingAStagesStepGiveItOneStepPerIntervalAndPass) {
+  for (CouplingMode mode : {CouplingMode::loose, CouplingMode::strong}) {
+    VaryingLimit fast;                          // limit 0.05–0.15 ms
+    Oscillator slow("slow", 1, 1, 0, 1, 0.02);  // limit 0.04 ms: several substeps per interval
+    SchedulerOptions options;
+    options.sync_step_ms = 0.7;
+    options.interval_stage = 0;
+    options.mode = mode;
+    options.strong_max_iterations = 3;  // no transfers: nothing changes, converged at the 2nd pass
+    Scheduler scheduler({{&fast, {}}, {&slow, {}}}, options);
+    scheduler.advance_to(10.3);
+    expect_landed_within_limits(scheduler, fast, slow, 10.3);
+    const SchedulerStats& st = scheduler.stats();
+    EXPECT_EQ(st.modules[0].steps, st.passes);
+    EXPECT_EQ(st.passes, (mode == CouplingMode::strong ? 2 : 1) * st.intervals);
+    // 10.3 ms at 0.05–0.15 ms per interval (fixed intervals of 0.7 ms would be 15)
+    EXPECT_GE(st.intervals, 10.3 / 0.15);
+    EXPECT_LE(st.intervals, 10.3 / 0.05 + 1);
+    EXPECT_GT(slow.steps(), st.passes);  // sub-cycled: ceil(interval / 0.04) >= 2 where the interval > 0.04
+    EXPECT_LE(st.modules[1].max_step_over_limit, 1 + 1e-12);
+  }
+  Oscillator a("a", 1, 1, 0, 1, 0.1), b("b", 1, 1, 0, 1, 0.1);
+  for (int bad : {-2, 2}) {
+    SchedulerOptions o;
+    o.interval_stage = bad;
+    try {
+      Scheduler scheduler({{&a, {}}, {&b, {}}}, o);
+      FAIL() << "no error for interval_stage = " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("interval_stage = " + std::to_string(bad)), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Scheduler, AdvancingToTheCurrentTimeDoesNothingAndBackwardsIsAnError) {
