@@ -600,6 +600,11 @@ std::vector<Param> build_table() {
                              "fsei.sync_step_ms, so the fluid takes one step per interval and coupling pass instead "
                              "of filling a fixed interval with one or two (docs/benchmarks.md: with strong coupling "
                              "the passes repeat the fluid's steps)."));
+  t.push_back(SYSTOLE_INT(fsei.fluid_steps_per_interval, "", 1, 1, 8,
+                          "Scenes 'fsei'/'fsi' with fsei.sync_interval = fluid_step: each interval is this many "
+                          "of the fluid's stable steps at its start (still at most fsei.sync_step_ms; ours): fewer "
+                          "intervals, so fewer coupling passes and fewer structure and load evaluations, against "
+                          "a larger change per interval. With fixed intervals it must stay 1."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "

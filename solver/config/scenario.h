@@ -227,6 +227,7 @@ struct Fsei {
   double aortic_prestress_fraction;     // with "prestress": the wall's share of the ground pressure, the rest an outer load (ours)
   std::string slab_split;               // "balanced" | "uniform": grid::Slabs' z split over the ranks (ours)
   std::string sync_interval;            // "fixed" | "fluid_step": coupling::SchedulerOptions::interval_stage (ours)
+  int fluid_steps_per_interval;         // with "fluid_step": coupling::SchedulerOptions::interval_stage_steps (ours)
 };
 
 struct Scenario {

@@ -36,6 +36,7 @@ void validate(const SchedulerOptions& o) {
   if (o.iqn_reuse_intervals < 0) range("iqn_reuse_intervals", o.iqn_reuse_intervals, "[0, inf)");
   if (!(o.iqn_filter > 0 && o.iqn_filter < 1)) range("iqn_filter", o.iqn_filter, "(0, 1)");
   if (o.interval_stage < -1) range("interval_stage", o.interval_stage, "-1 (fixed intervals) or a stage index");
+  if (o.interval_stage_steps < 1) range("interval_stage_steps", o.interval_stage_steps, "[1, inf)");
   if (!(o.min_step_ms > 0)) range("min_step_ms", o.min_step_ms, "(0, inf)");
   if (!(o.step_limit_factor > 0) || !std::isfinite(o.step_limit_factor))
     range("step_limit_factor", o.step_limit_factor, "(0, inf)");
@@ -336,8 +337,9 @@ void Scheduler::advance_to(double t_ms) {
       // The stage's stable step now (a collapsing or non-finite one is sub_cycle's to diagnose:
       // the interval then stays at sync_step_ms and the stage's substeps report it).
       const double limit = stages_[static_cast<std::size_t>(options_.interval_stage)].module->max_step_ms();
-      const double step = limit >= options_.min_step_ms && std::isfinite(limit) ? std::min(options_.sync_step_ms, limit)
-                                                                                 : options_.sync_step_ms;
+      const double step = limit >= options_.min_step_ms && std::isfinite(limit)
+                              ? std::min(options_.sync_step_ms, options_.interval_stage_steps * limit)
+                              : options_.sync_step_ms;
       const double intervals = std::ceil(left / step * (1 - 1e-12));
       t_end = intervals <= 1 ? t_ms : time_ms_ + left / intervals;
     }

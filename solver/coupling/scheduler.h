@@ -55,6 +55,8 @@ struct SchedulerOptions {
   // so the stage takes one step per interval and pass (the coupling at the fluid's own CFL step
   // instead of a fixed Δt_sync that the fluid fills with one or two steps). -1: fixed intervals.
   int interval_stage = -1;
+  // With interval_stage >= 0: an interval is at most this many of the stage's stable steps (>= 1).
+  int interval_stage_steps = 1;
   CouplingMode mode = CouplingMode::loose;
   double strong_tolerance = 1e-4;         // relative change of the transferred data
   int strong_max_iterations = 4;          // passes per interval, >= 1

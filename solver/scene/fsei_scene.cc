@@ -391,6 +391,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                      fs.aortic_pretension + "\"); with \"outer_load\" leave it at 1");
   if (fs.sync_interval != "fixed" && fs.sync_interval != "fluid_step")
     throw InputError("fsei.sync_interval = \"" + fs.sync_interval + "\" is not one of: fixed, fluid_step");
+  if (fs.sync_interval == "fixed" && fs.fluid_steps_per_interval != 1)
+    throw InputError("fsei.fluid_steps_per_interval = " + std::to_string(fs.fluid_steps_per_interval) +
+                     " needs fsei.sync_interval = \"fluid_step\"; with fixed intervals (of fsei.sync_step_ms) leave it at 1");
   if (s.structure.mitral_limiter_end_phase != 1 && !s.structure.mitral_limiter)
     throw InputError("structure.mitral_limiter_end_phase = " + std::to_string(s.structure.mitral_limiter_end_phase) +
                      " is the mitral limiter's window: it needs structure.mitral_limiter = true; without the "
@@ -831,6 +834,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // fluid_step: the intervals follow the fluid's stage (ours; EP's tissue keeps its own fixed
   // grid whatever the interval: coupling::ElectroModule)
   if (fs.sync_interval == "fluid_step") so.interval_stage = with_ep ? 1 : 0;
+  so.interval_stage_steps = fs.fluid_steps_per_interval;
   so.mode = fs.strong_coupling ? coupling::CouplingMode::strong : coupling::CouplingMode::loose;
   so.strong_tolerance = s.coupling.strong_tolerance;
   so.strong_max_iterations = s.coupling.strong_max_iterations;

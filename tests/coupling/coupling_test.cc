@@ -105,6 +105,23 @@ TEST(Scheduler, IntervalsFollowingAStagesStepGiveItOneStepPerIntervalAndPass) {
     EXPECT_GT(slow.steps(), st.passes);  // sub-cycled: ceil(interval / 0.04) >= 2 where the interval > 0.04
     EXPECT_LE(st.modules[1].max_step_over_limit, 1 + 1e-12);
   }
+  // Two of the stage's steps per interval: half the intervals, two (or, where the limit fell
+  // within the interval, three) steps in each.
+  {
+    VaryingLimit fast;
+    Oscillator slow("slow", 1, 1, 0, 1, 0.02);
+    SchedulerOptions options;
+    options.sync_step_ms = 0.7;
+    options.interval_stage = 0;
+    options.interval_stage_steps = 2;
+    Scheduler scheduler({{&fast, {}}, {&slow, {}}}, options);
+    scheduler.advance_to(10.3);
+    expect_landed_within_limits(scheduler, fast, slow, 10.3);
+    const SchedulerStats& st = scheduler.stats();
+    EXPECT_GE(st.modules[0].steps, 2 * st.intervals);
+    EXPECT_LE(st.modules[0].steps, 3 * st.intervals);
+    EXPECT_LE(st.intervals, 10.3 / 0.1 + 1);
+  }
   Oscillator a("a", 1, 1, 0, 1, 0.1), b("b", 1, 1, 0, 1, 0.1);
   for (int bad : {-2, 2}) {
     SchedulerOptions o;
@@ -116,6 +133,10 @@ TEST(Scheduler, IntervalsFollowingAStagesStepGiveItOneStepPerIntervalAndPass) {
       EXPECT_NE(std::string(e.what()).find("interval_stage = " + std::to_string(bad)), std::string::npos) << e.what();
     }
   }
+  SchedulerOptions no_steps;
+  no_steps.interval_stage = 0;
+  no_steps.interval_stage_steps = 0;
+  EXPECT_THROW(Scheduler({{&a, {}}, {&b, {}}}, no_steps), InputError);
 }
 
 TEST(Scheduler, AdvancingToTheCurrentTimeDoesNothingAndBackwardsIsAnError) {

@@ -189,6 +189,10 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
       scenario("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}}));
   EXPECT_NE(window.find("structure.mitral_limiter_end_phase = 0.4"), std::string::npos) << window;
   EXPECT_NE(window.find("needs structure.mitral_limiter = true"), std::string::npos) << window;
+  // Several fluid steps per interval without intervals that follow the fluid's step.
+  const std::string steps = error_of(scenario("fsi", {{"fsei", {{"fluid_steps_per_interval", 2}}}}));
+  EXPECT_NE(steps.find("fsei.fluid_steps_per_interval = 2 needs fsei.sync_interval = \"fluid_step\""), std::string::npos)
+      << steps;
   std::string zero = "no error";
   try {
     scenario("fsi", {{"structure", {{"mitral_limiter_end_phase", 0}}}});
