@@ -211,7 +211,7 @@ void BodyGroup::maybe_rebuild() {
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
     const auto& x = bodies_[k].positions_mm();
     for (std::size_t i = 0; i < x.size(); ++i)
-      if (!((x[i] - x_build_[k][i]).squaredNorm() <= lim2)) {
+      if ((x[i] - x_build_[k][i]).squaredNorm() > lim2) {
         moved[k] = 1;
         any = true;
         break;
