@@ -45,7 +45,9 @@ struct BeatSamples {
 };
 
 // Phases t/T in [0, 1] of the first opening (upward crossing) and the first closing
-// (downward crossing) found in the beat; empty when the flow does not cross.
+// (downward crossing) found in the beat; empty when the flow does not cross. The event away from
+// the state of the beat's first sample comes first, the other one is the first crossing back
+// after it: a valve that starts closed can only close after it opened.
 struct ValveEvents {
   std::optional<double> open_phase;
   std::optional<double> close_phase;
@@ -71,9 +73,9 @@ struct BeatMetrics {
   double aortic_peak_flow_ml_s = 0;
   ValveEvents aortic_valve;
   ValveEvents mitral_valve;
-  // Early (E) and atrial (A) filling waves: the first and the last local maximum of the mitral
-  // flow after its opening that exceed 10 % of the beat's peak mitral flow; A is empty when
-  // there is only one such maximum.
+  // Early (E) and atrial (A) filling waves: the first local maximum of the mitral flow after its
+  // opening that exceeds 10 % of the beat's peak mitral flow, and the largest such maximum after
+  // it; A is empty when there is only one such maximum.
   std::optional<double> mitral_e_peak_phase, mitral_e_peak_flow_ml_s;
   std::optional<double> mitral_a_peak_phase, mitral_a_peak_flow_ml_s;
 };
@@ -110,8 +112,9 @@ std::optional<double> first_crossing(std::span<const double> time_s, std::span<c
 std::optional<double> first_lasting_crossing(std::span<const double> time_s, std::span<const double> values,
                                              double level, Crossing direction, double min_dwell_s);
 
-// Opening/closing phases of one valve from its flow curve (see ValveEvents): the first lasting
-// crossings of threshold_fraction * peak |flow| (dwell min_dwell_fraction * period_s).
+// Opening/closing phases of one valve from its flow curve (see ValveEvents): lasting crossings
+// of threshold_fraction * peak |flow| (dwell min_dwell_fraction * period_s), the first one away
+// from the state of the first sample, then the first one back after it.
 ValveEvents valve_events(std::span<const double> time_s, std::span<const double> flow_ml_s,
                          double beat_start_s, double period_s, double threshold_fraction = 0,
                          double min_dwell_fraction = 0);

@@ -203,6 +203,11 @@ void BodyGroup::build_candidates(Pair& pair, const std::vector<Vec3>& xa, const 
 // of a and no node of b has moved more than skin / 2 since. So only the bodies of which a node
 // moved that far are re-hashed, and only the pairs they belong to rebuilt (ours: a fluttering
 // leaflet does not re-hash the LV).
+void BodyGroup::rehash_body(std::size_t k) {
+  hash_[k] = std::make_shared<const TriangleHash>(
+      hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
+}
+
 void BodyGroup::maybe_rebuild() {
   if (pairs_.empty()) return;
   const double lim2 = 0.25 * options_.skin_mm * options_.skin_mm;
@@ -221,8 +226,7 @@ void BodyGroup::maybe_rebuild() {
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
     if (!moved[k]) continue;
     x_build_[k] = bodies_[k].positions_mm();
-    hash_[k] = std::make_shared<const TriangleHash>(
-        hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
+    rehash_body(k);
     ++stats_.body_rebuilds;
   }
   for (Pair& p : pairs_) {
@@ -334,9 +338,7 @@ void BodyGroup::import_state(const StateArchive& a, const std::string& prefix) {
   if (!pairs_.empty()) {
     for (std::size_t k = 0; k < x_build_.size(); ++k)
       x_build_[k] = a.get_vectors<Vec3>(prefix + bodies_[k].name() + "/x_build_mm", static_cast<long>(bodies_[k].node_count()));
-    for (std::size_t k = 0; k < bodies_.size(); ++k)
-      hash_[k] = std::make_shared<const TriangleHash>(
-          hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
+    for (std::size_t k = 0; k < bodies_.size(); ++k) rehash_body(k);
     for (std::size_t p = 0; p < pairs_.size(); ++p) {
       build_candidates(pairs_[p], x_build_[pairs_[p].a], *hash_[pairs_[p].b]);
       const std::vector<double>& side =

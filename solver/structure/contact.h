@@ -132,6 +132,8 @@ class BodyGroup {
   static TriangleHash hash_triangles(const std::vector<Vec3>& x, const std::vector<geometry::Tri>& tri, double radius);
   static void build_candidates(Pair& pair, const std::vector<Vec3>& xa, const TriangleHash& hash);
   void maybe_rebuild();
+  // Hashes body k's triangles at x_build_[k] (search radius d_c + skin) into hash_[k].
+  void rehash_body(std::size_t k);
   void evaluate_contact();
   void average_shared_cells();  // kCellAverage
 

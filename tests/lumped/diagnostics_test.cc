@@ -178,5 +178,67 @@ TEST(BeatMetrics, ADwellIgnoresARippleThroughTheThreshold) {
   EXPECT_THROW(valve_events(t, q, 0, 1, 0.05, -0.1), std::invalid_argument);
 }
 
+TEST(BeatMetrics, AValveThatStartsClosedClosesOnlyAfterItOpened) {
+  // The shape of run w2's aortic flow (docs/fsei.md session 20): closed at the start, a 2-ms
+  // poke above the 5 % level at 18 ms (the isovolumic ripple), the ejection 0.12-0.30 s. Linear
+  // pieces, so every crossing is exact. Read as "first crossing each way", the ripple's way
+  // back down was the closure (0.021 T, ESV = EDV, EF -0.6 %).
+  const double period = 0.857;
+  std::vector<double> t, q, v, p;
+  for (int i = 0; i <= 857; ++i) {
+    const double s = 1e-3 * i;
+    double f = 0;
+    if (std::abs(s - 0.018) < 0.003) f = 30 * (1 - std::abs(s - 0.018) / 0.003);  // > 20 on 0.017..0.019
+    if (s > 0.12 && s <= 0.15) f = 400 * (s - 0.12) / 0.03;                        // 20 at 0.1215
+    if (s > 0.15 && s < 0.30) f = 400 * (0.30 - s) / 0.15;                         // 20 at 0.2925
+    t.push_back(s);
+    q.push_back(f);
+    v.push_back(s < 0.12 ? 125 : s < 0.30 ? 125 - 35 * (s - 0.12) / 0.18 : 90);
+    p.push_back(10);
+  }
+  const ValveEvents e = valve_events(t, q, 0, period, 0.05, 0.02);
+  ASSERT_TRUE(e.open_phase && e.close_phase);
+  EXPECT_NEAR(*e.open_phase, 0.1215 / period, 1e-9);
+  EXPECT_NEAR(*e.close_phase, 0.2925 / period, 1e-9);
+  BeatSamples b{t, v, p, p, q, q, 0, period};
+  b.valve_threshold_fraction = 0.05;
+  b.valve_min_dwell_fraction = 0.02;
+  b.end_diastole_at_beat_start = true;
+  const BeatMetrics m = compute_beat_metrics(b);
+  EXPECT_NEAR(m.esv_ml, 125 - 35 * (0.2925 - 0.12) / 0.18, 1e-9);
+  EXPECT_GT(m.ejection_fraction_percent, 25);
+  // the same flow started open (the 0-D mitral at a beat that starts in diastole): the closure
+  // comes first, the opening is the first lasting crossing back up after it (no ripple here:
+  // within the dwell after the closure it would make that closure not last)
+  std::vector<double> q_open = q;
+  for (int i = 0; i <= 30; ++i) q_open[i] = std::max(0, 100 - 10 * i);  // 20 (the level) at 8 ms
+  const ValveEvents o = valve_events(t, q_open, 0, period, 0.05, 0.02);
+  ASSERT_TRUE(o.open_phase && o.close_phase);
+  EXPECT_NEAR(*o.close_phase, 0.008 / period, 1e-9);
+  EXPECT_NEAR(*o.open_phase, 0.1215 / period, 1e-9);
+}
+
+TEST(BeatMetrics, TheAWaveIsTheLargestFillingPeakAfterE) {
+  // Run w2's mitral flow (docs/fsei.md session 20): E 140 ml/s at 0.43 s, A 330 ml/s at 0.81 s,
+  // and a ripple of 90 ml/s at 0.84 s after the A wave that "last maximum" took for A.
+  std::vector<double> t, q, v;
+  for (int i = 0; i <= 857; ++i) {
+    const double s = 1e-3 * i;
+    double f = 0;
+    if (std::abs(s - 0.43) < 0.05) f = 140 * (1 - std::abs(s - 0.43) / 0.05);
+    if (std::abs(s - 0.81) < 0.02) f = 330 * (1 - std::abs(s - 0.81) / 0.02);
+    if (std::abs(s - 0.84) < 0.008) f = 90 * (1 - std::abs(s - 0.84) / 0.008);
+    if (s > 0.38 && f < 5) f = 5;  // open, a low diastasis flow
+    t.push_back(s);
+    q.push_back(f);
+    v.push_back(100);
+  }
+  const BeatMetrics m = compute_beat_metrics({t, v, v, v, q, q, 0, 0.857});
+  ASSERT_TRUE(m.mitral_e_peak_phase && m.mitral_a_peak_phase);
+  EXPECT_NEAR(*m.mitral_e_peak_flow_ml_s, 140, 1e-9);
+  EXPECT_NEAR(*m.mitral_a_peak_flow_ml_s, 330, 1e-9);
+  EXPECT_NEAR(*m.mitral_a_peak_phase, 0.81 / 0.857, 1e-9);
+}
+
 }  // namespace
 }  // namespace systole::diagnostics
