@@ -605,6 +605,13 @@ std::vector<Param> build_table() {
                           "of the fluid's stable steps at its start (still at most fsei.sync_step_ms; ours): fewer "
                           "intervals, so fewer coupling passes and fewer structure and load evaluations, against "
                           "a larger change per interval. With fixed intervals it must stay 1."));
+  t.push_back(SYSTOLE_CHOICE(fsei.coupling_order, "fluid_first", (std::vector<std::string_view>{"fluid_first", "structure_first"}),
+                             "Scenes 'fsei'/'fsi': the order of a coupling pass: fluid_first (the seed's: EP, the "
+                             "fluid, then the shells with its loads) or structure_first (ours: EP, the shells with "
+                             "the loads last written, then the fluid at their new shape). With strong coupling, "
+                             "structure_first measures an interval's first pass too (the loads it makes against "
+                             "those the shells used), so an interval whose loads change less than "
+                             "coupling.strong_tolerance ends after one pass instead of two."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "

@@ -228,6 +228,8 @@ struct Fsei {
   std::string slab_split;               // "balanced" | "uniform": grid::Slabs' z split over the ranks (ours)
   std::string sync_interval;            // "fixed" | "fluid_step": coupling::SchedulerOptions::interval_stage (ours)
   int fluid_steps_per_interval;         // with "fluid_step": coupling::SchedulerOptions::interval_stage_steps (ours)
+  std::string coupling_order;           // "fluid_first" | "structure_first": the stages' order; structure_first
+                                        // measures strong coupling's first pass (SchedulerOptions::first_pass_residual) (ours)
 };
 
 struct Scenario {

@@ -131,7 +131,18 @@ double Scheduler::relax(std::size_t k, bool relaxed_transfer, int iteration) {
   std::vector<double>& x = previous_[k];
   std::vector<double>& last_residual = previous_residual_[k];
   if (iteration == 0 || x.size() != raw.size()) {
-    const double change = iteration == 0 ? 0.0 : 1.0;  // data that changed size: not converged
+    // data that changed size (or none written yet) are not converged; the first pass measures
+    // nothing unless first_pass_residual asks it to, for the relaxed transfers
+    double change = iteration == 0 ? 0.0 : 1.0;
+    if (iteration == 0 && relaxed_transfer && options_.first_pass_residual) {
+      if (x.size() != raw.size()) {
+        change = 1.0;
+      } else {
+        double d2 = 0;
+        for (std::size_t i = 0; i < raw.size(); ++i) d2 += (raw[i] - x[i]) * (raw[i] - x[i]);
+        change = std::sqrt(d2) / std::max(norm(raw), 1e-300);
+      }
+    }
     QuasiNewtonMemory& m = iqn_[k];
     if (x.size() != raw.size() && !x.empty()) {
       m = QuasiNewtonMemory{};  // columns of another length are of no use
@@ -251,6 +262,16 @@ void Scheduler::export_state(StateArchive& a, const std::string& prefix) const {
   for (const ModuleStats& s : stats_.modules)
     m.insert(m.end(), {static_cast<double>(s.steps), s.min_step_ms, s.max_step_ms, s.max_step_over_limit, s.wall_time_s});
   a.put(prefix + "modules", m);
+  // first_pass_residual: the relaxed transfers' last written data (the next interval's first
+  // pass is measured against them, and import_state writes them again)
+  if (options_.first_pass_residual) {
+    std::size_t k = 0;
+    for (const Stage& s : stages_)
+      for (const Transfer& tr : s.after) {
+        if (tr.relaxed && !previous_[k].empty()) a.put(prefix + "written/" + std::to_string(k), previous_[k]);
+        ++k;
+      }
+  }
   // IQN-ILS's secant columns (the next interval reuses them): per transfer, the column count of
   // each interval (newest first) and the columns concatenated
   for (std::size_t k = 0; k < iqn_.size(); ++k) {
@@ -293,6 +314,18 @@ void Scheduler::import_state(const StateArchive& a, const std::string& prefix) {
     s.max_step_ms = m[5 * k + 2];
     s.max_step_over_limit = m[5 * k + 3];
     s.wall_time_s = m[5 * k + 4];
+  }
+  if (options_.first_pass_residual) {
+    std::size_t k = 0;
+    for (const Stage& s : stages_)
+      for (const Transfer& tr : s.after) {
+        const std::string key = prefix + "written/" + std::to_string(k);
+        if (tr.relaxed && a.has(key)) {
+          previous_[k] = a.get(key);
+          tr.write(previous_[k]);
+        }
+        ++k;
+      }
   }
   for (std::size_t k = 0; k < iqn_.size(); ++k) {
     QuasiNewtonMemory& q = iqn_[k];
@@ -353,7 +386,7 @@ void Scheduler::advance_to(double t_ms) {
         if (it > 0)
           for (Stage& s : stages_) s.module->restore();
         residual = run_pass(t_end, it);
-        if (it > 0 && residual < options_.strong_tolerance) {
+        if ((it > 0 || options_.first_pass_residual) && residual < options_.strong_tolerance) {
           converged = true;
           break;
         }

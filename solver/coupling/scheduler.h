@@ -67,6 +67,15 @@ struct SchedulerOptions {
   // norm is dropped (ours: Haelterman et al. 2016's QR2 filter).
   int iqn_reuse_intervals = 8;
   double iqn_filter = 1e-2;
+  // Strong coupling (ours): the first pass of an interval already measures the relaxed
+  // transfers' change, against the data last written (the previous interval's final data), so
+  // an interval whose first pass changes them less than strong_tolerance ends after that pass.
+  // Only meaningful when every relaxed transfer is consumed before it is produced in a pass (the
+  // structure before the fluid, relaxing the loads): the first pass then evaluates the coupled
+  // map at the previous interval's data, and a small change is a small fixed-point residual.
+  // The data last written by the relaxed transfers are part of the checkpoint (export_state),
+  // and import_state writes them again, so a resumed run takes the same passes.
+  bool first_pass_residual = false;
   // The smallest step a module may report before the run is declared unstable (a collapsing
   // stable step means a blow-up in the making) (ours).
   double min_step_ms = 1e-9;

@@ -70,6 +70,24 @@ class ShiftedClock final : public coupling::Module {
   double offset_ms_;
 };
 
+// The scene's clock as a stage of its own (fsi with fsei.coupling_order = structure_first):
+// it reaches an interval's end before the shells, so the prescribed tension the shells get is
+// the one at the interval's end, as with the fluid's clock in the fluid-first order.
+class SceneClock final : public coupling::Module {
+ public:
+  explicit SceneClock(double t_ms) : t_ms_(t_ms) {}
+  const std::string& name() const override { return name_; }
+  double time_ms() const override { return t_ms_; }
+  double max_step_ms() const override { return 1e9; }  // no limit of its own: one step per interval
+  void step(double dt_ms) override { t_ms_ += dt_ms; }
+  void save() override { saved_ms_ = t_ms_; }
+  void restore() override { t_ms_ = saved_ms_; }
+
+ private:
+  std::string name_ = "scene clock";
+  double t_ms_, saved_ms_ = 0;
+};
+
 // A sub-mesh with the same nodes and the triangles `keep` selects (the LA wall and its vein caps
 // become separate marker bodies that share the shell's nodes).
 geometry::TriMesh select_triangles(const geometry::TriMesh& mesh, const std::string& name,
@@ -391,6 +409,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                      fs.aortic_pretension + "\"); with \"outer_load\" leave it at 1");
   if (fs.sync_interval != "fixed" && fs.sync_interval != "fluid_step")
     throw InputError("fsei.sync_interval = \"" + fs.sync_interval + "\" is not one of: fixed, fluid_step");
+  if (fs.coupling_order != "fluid_first" && fs.coupling_order != "structure_first")
+    throw InputError("fsei.coupling_order = \"" + fs.coupling_order + "\" is not one of: fluid_first, structure_first");
   if (fs.sync_interval == "fixed" && fs.fluid_steps_per_interval != 1)
     throw InputError("fsei.fluid_steps_per_interval = " + std::to_string(fs.fluid_steps_per_interval) +
                      " needs fsei.sync_interval = \"fluid_step\"; with fixed intervals (of fsei.sync_step_ms) leave it at 1");
@@ -657,6 +677,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   std::unique_ptr<electro::TissueSolver> tissue;
   std::unique_ptr<coupling::ElectroModule> ep_module;
   std::unique_ptr<ShiftedClock> ep_clock;
+  const bool structure_first = fs.coupling_order == "structure_first";
+  // fsi in the structure-first order: the prescribed tension's clock is a stage before the shells
+  std::unique_ptr<SceneClock> scene_clock;
+  if (structure_first && !with_ep)
+    scene_clock = std::make_unique<SceneClock>(resume_from ? resumed.scalar("scene/time_ms") : 0.0);
   {
     const geometry::TriMesh& lv_mesh = heart.body(geometry::kLvBody);
     const geometry::TriMesh& la_mesh = heart.body(geometry::kLaBody);
@@ -739,7 +764,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   coupling::Transfer tension{"active_tension",
                              [&](std::vector<double>& d) {
                                // [scene time, EP tension per EP node (fsei)]
-                               d.assign(1, ep_clock ? ep_clock->time_ms() : fluid_module.time_ms());
+                               d.assign(1, ep_clock      ? ep_clock->time_ms()
+                                           : scene_clock ? scene_clock->time_ms()
+                                                         : fluid_module.time_ms());
                                if (with_ep) d.insert(d.end(), tissue->active_tension_kpa().begin(), tissue->active_tension_kpa().end());
                              },
                              [&](const std::vector<double>& d) {
@@ -813,27 +840,29 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                              }
                            },
                            false};
+  // A pass: fluid_first (the seed's Fig. 6): [EP,] the fluid, the shells with its loads;
+  // structure_first (ours): [EP or the scene's clock,] the shells with the loads last written,
+  // the fluid at their new shape. The loads are the relaxed transfer either way.
   std::vector<coupling::Stage> stages;
-  if (with_ep) {
-    stages.resize(3);
-    stages[0].module = ep_clock.get();
-    stages[0].after = {tension};
-    stages[1].module = &fluid_module;
-    stages[1].after = {loads};
-    stages[2].module = &structure_module;
-    stages[2].after = {nodes};
-  } else {
-    stages.resize(2);
-    stages[0].module = &fluid_module;
-    stages[0].after = {tension, loads};
-    stages[1].module = &structure_module;
-    stages[1].after = {nodes};
-  }
+  if (structure_first)
+    stages = {{with_ep ? static_cast<coupling::Module*>(ep_clock.get()) : scene_clock.get(), {tension}},
+              {&structure_module, {nodes}},
+              {&fluid_module, {loads}}};
+  else if (with_ep)
+    stages = {{ep_clock.get(), {tension}}, {&fluid_module, {loads}}, {&structure_module, {nodes}}};
+  else
+    stages = {{&fluid_module, {tension, loads}}, {&structure_module, {nodes}}};
+  const auto stage_of = [&](const coupling::Module* m) {
+    return static_cast<std::size_t>(std::find_if(stages.begin(), stages.end(), [&](const coupling::Stage& st) {
+                                      return st.module == m;
+                                    }) - stages.begin());
+  };
+  const std::size_t fluid_stage = stage_of(&fluid_module), structure_stage = stage_of(&structure_module);
   coupling::SchedulerOptions so;
   so.sync_step_ms = sync_ms;
   // fluid_step: the intervals follow the fluid's stage (ours; EP's tissue keeps its own fixed
   // grid whatever the interval: coupling::ElectroModule)
-  if (fs.sync_interval == "fluid_step") so.interval_stage = with_ep ? 1 : 0;
+  if (fs.sync_interval == "fluid_step") so.interval_stage = static_cast<int>(fluid_stage);
   so.interval_stage_steps = fs.fluid_steps_per_interval;
   so.mode = fs.strong_coupling ? coupling::CouplingMode::strong : coupling::CouplingMode::loose;
   so.strong_tolerance = s.coupling.strong_tolerance;
@@ -843,6 +872,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                   : s.coupling.relaxation == "none"     ? coupling::Relaxation::none
                                                         : coupling::Relaxation::aitken;
   so.iqn_reuse_intervals = s.coupling.iqn_reuse_intervals;
+  // structure_first: the shells consume the loads before the fluid makes them, so a pass's
+  // change of the loads is a fixed-point residual from the first pass on (ours)
+  so.first_pass_residual = structure_first;
   // A resumed run: the fluid, the shells and the scheduler where the checkpoint left them, and
   // the markers on the shells' nodes (what the last interval's transfer had set)
   if (resume_from) {
@@ -1347,9 +1379,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["simulated_time_ms"] = t;
   M["resumed_from_ms"] = resume_from ? resumed.scalar("scene/time_ms") : 0.0;  // 0: a run from t = 0
   const auto& st = scheduler.stats();
-  const std::size_t fluid_stage = with_ep ? 1 : 0;
   M["fluid_steps"] = static_cast<double>(st.modules[fluid_stage].steps);
-  M["structure_substeps"] = static_cast<double>(st.modules[fluid_stage + 1].steps);
+  M["structure_substeps"] = static_cast<double>(st.modules[structure_stage].steps);
   M["ep_steps"] = with_ep ? static_cast<double>(st.modules[0].steps + std::lround(s.av_delay_ms / s.electro.time_step_ms)) : 0.0;
   M["coupling_intervals"] = static_cast<double>(st.intervals);
   // strong coupling: passes in all (= intervals when loose), intervals that ended at the pass
@@ -1366,7 +1397,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["field_frames"] = fields ? fields->frames() : 0;
   M["ep_wall_s"] = with_ep ? st.modules[0].wall_time_s : 0.0;
   M["fluid_wall_s"] = st.modules[fluid_stage].wall_time_s;
-  M["structure_wall_s"] = st.modules[fluid_stage + 1].wall_time_s;
+  M["structure_wall_s"] = st.modules[structure_stage].wall_time_s;
   auto add = [&](const std::string& name, const std::string& unit, std::vector<double> v) {
     result.series.push_back({name, unit, std::move(v)});
   };

@@ -200,6 +200,15 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
     zero = e.what();
   }
   EXPECT_NE(zero.find("structure.mitral_limiter_end_phase"), std::string::npos) << zero;
+  // A coupling order that does not exist.
+  std::string order = "no error";
+  try {
+    scenario("fsi", {{"fsei", {{"coupling_order", "structure_second"}}}});
+  } catch (const std::exception& e) {
+    order = e.what();
+  }
+  EXPECT_NE(order.find("fsei.coupling_order"), std::string::npos) << order;
+  EXPECT_NE(order.find("structure_first"), std::string::npos) << order;
 }
 
 // The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
