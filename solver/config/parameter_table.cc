@@ -611,7 +611,9 @@ std::vector<Param> build_table() {
                              "the loads last written, then the fluid at their new shape). With strong coupling, "
                              "structure_first measures an interval's first pass too (the loads it makes against "
                              "those the shells used), so an interval whose loads change less than "
-                             "coupling.strong_tolerance ends after one pass instead of two."));
+                             "coupling.strong_tolerance ends after one pass instead of two. Experimental: in the "
+                             "heart such one-pass intervals let an oscillation of the LV wall and its blood grow "
+                             "in the ejection (the LV pressure ±6 mmHg at a 2-ms period; docs/fsei.md session 20)."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "
