@@ -608,7 +608,7 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_CHOICE(fsei.coupling_order, "fluid_first", (std::vector<std::string_view>{"fluid_first", "structure_first"}),
                              "Scenes 'fsei'/'fsi': the order of a coupling pass: fluid_first (the seed's: EP, the "
                              "fluid, then the shells with its loads) or structure_first (ours: EP, the shells with "
-                             "the loads last written, then the fluid at their new shape). With strong coupling, "
+                             "the loads last written, then the fluid at their new shape; strong coupling only). "
                              "structure_first measures an interval's first pass too (the loads it makes against "
                              "those the shells used), so an interval whose loads change less than "
                              "coupling.strong_tolerance ends after one pass instead of two. Experimental: in the "

@@ -411,6 +411,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     throw InputError("fsei.sync_interval = \"" + fs.sync_interval + "\" is not one of: fixed, fluid_step");
   if (fs.coupling_order != "fluid_first" && fs.coupling_order != "structure_first")
     throw InputError("fsei.coupling_order = \"" + fs.coupling_order + "\" is not one of: fluid_first, structure_first");
+  // Loose coupling in the shells-first order would hand the shells the loads of the last pass
+  // without keeping them in a checkpoint; the order is for strong coupling's one-pass intervals.
+  if (fs.coupling_order == "structure_first" && !fs.strong_coupling)
+    throw InputError("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true (its point is "
+                     "strong coupling's first-pass check); with loose coupling use \"fluid_first\"");
   if (fs.sync_interval == "fixed" && fs.fluid_steps_per_interval != 1)
     throw InputError("fsei.fluid_steps_per_interval = " + std::to_string(fs.fluid_steps_per_interval) +
                      " needs fsei.sync_interval = \"fluid_step\"; with fixed intervals (of fsei.sync_step_ms) leave it at 1");

@@ -209,6 +209,10 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   }
   EXPECT_NE(order.find("fsei.coupling_order"), std::string::npos) << order;
   EXPECT_NE(order.find("structure_first"), std::string::npos) << order;
+  // The shells-first order without strong coupling.
+  const std::string loose = error_of(scenario("fsi", {{"fsei", {{"coupling_order", "structure_first"}}}}));
+  EXPECT_NE(loose.find("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"), std::string::npos)
+      << loose;
 }
 
 // The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
