@@ -198,16 +198,16 @@ void BodyGroup::build_candidates(Pair& pair, const std::vector<Vec3>& xa, const 
   }
 }
 
-// The candidate lists of a pair (a, b) hold every triangle of b within d_c + skin of a node of a,
-// from a's and b's positions at their own last builds; they stay complete for d_c while no node
-// of a and no node of b has moved more than skin / 2 since. So only the bodies of which a node
-// moved that far are re-hashed, and only the pairs they belong to rebuilt (ours: a fluttering
-// leaflet does not re-hash the LV).
 void BodyGroup::rehash_body(std::size_t k) {
   hash_[k] = std::make_shared<const TriangleHash>(
       hash_triangles(x_build_[k], bodies_[k].stress_free_mesh().tri, options_.distance_mm + options_.skin_mm));
 }
 
+// The candidate lists of a pair (a, b) hold every triangle of b within d_c + skin of a node of a,
+// from a's and b's positions at their own last builds; they stay complete for d_c while no node
+// of a and no node of b has moved more than skin / 2 since. So only the bodies of which a node
+// moved that far are re-hashed, and only the pairs they belong to rebuilt (ours: a fluttering
+// leaflet does not re-hash the LV).
 void BodyGroup::maybe_rebuild() {
   if (pairs_.empty()) return;
   const double lim2 = 0.25 * options_.skin_mm * options_.skin_mm;
