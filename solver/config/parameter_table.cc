@@ -614,6 +614,12 @@ std::vector<Param> build_table() {
                              "coupling.strong_tolerance ends after one pass instead of two. Experimental: in the "
                              "heart such one-pass intervals let an oscillation of the LV wall and its blood grow "
                              "in the ejection (the LV pressure ±6 mmHg at a 2-ms period; docs/fsei.md session 20)."));
+  t.push_back(SYSTOLE_CHOICE(fsei.first_pass_predictor, "last", (std::vector<std::string_view>{"last", "linear"}),
+                             "Scenes 'fsei'/'fsi' with fsei.coupling_order = structure_first: the loads the shells "
+                             "take in an interval's first pass: last (those last written: they lag one interval) "
+                             "or linear (ours: extrapolated from the last two intervals' loads, a second-order "
+                             "guess; the first pass's residual then measures the guess). Experimental "
+                             "(docs/fsei.md session 21)."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "

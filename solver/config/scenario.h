@@ -230,6 +230,7 @@ struct Fsei {
   int fluid_steps_per_interval;         // with "fluid_step": coupling::SchedulerOptions::interval_stage_steps (ours)
   std::string coupling_order;           // "fluid_first" | "structure_first": the stages' order; structure_first
                                         // measures strong coupling's first pass (SchedulerOptions::first_pass_residual) (ours)
+  std::string first_pass_predictor;     // "last" | "linear": SchedulerOptions::first_pass_predictor (ours)
 };
 
 struct Scenario {

@@ -40,6 +40,9 @@ void validate(const SchedulerOptions& o) {
   if (!(o.min_step_ms > 0)) range("min_step_ms", o.min_step_ms, "(0, inf)");
   if (!(o.step_limit_factor > 0) || !std::isfinite(o.step_limit_factor))
     range("step_limit_factor", o.step_limit_factor, "(0, inf)");
+  if (o.first_pass_predictor == FirstPassPredictor::linear && !(o.mode == CouplingMode::strong && o.first_pass_residual))
+    throw InputError("coupling option first_pass_predictor = linear needs strong coupling with first_pass_residual "
+                     "(the relaxed transfers consumed before they are produced in a pass)");
 }
 
 Scheduler::Scheduler(std::vector<Stage> stages, SchedulerOptions options)
@@ -68,6 +71,7 @@ Scheduler::Scheduler(std::vector<Stage> stages, SchedulerOptions options)
   previous_residual_.resize(transfers);
   aitken_.assign(transfers, options_.relaxation_factor);
   iqn_.resize(transfers);
+  written_before_.resize(transfers);
 }
 
 void Scheduler::sub_cycle(std::size_t stage, double t_end_ms) {
@@ -186,6 +190,28 @@ double Scheduler::relax(std::size_t k, bool relaxed_transfer, int iteration) {
   return change;
 }
 
+void Scheduler::predict(double interval_ms) {
+  std::size_t k = 0;
+  for (const Stage& s : stages_)
+    for (const Transfer& tr : s.after) {
+      std::vector<double>& x = previous_[k];  // x_n: the data last written
+      std::vector<double>& before = written_before_[k];
+      if (tr.relaxed && !x.empty()) {
+        if (before.size() == x.size() && last_interval_ms_ > 0) {
+          const double ratio = interval_ms / last_interval_ms_;
+          std::vector<double> guess(x.size());
+          for (std::size_t i = 0; i < x.size(); ++i) guess[i] = x[i] + ratio * (x[i] - before[i]);
+          before = x;
+          x = std::move(guess);
+          tr.write(x);
+        } else {
+          before = x;  // one interval's data: the guess stays x_n this time
+        }
+      }
+      ++k;
+    }
+}
+
 // IQN-ILS (Degroote, Bathe & Vierendeels 2009, Comput. Struct. 87:793), with the columns of
 // earlier intervals reused: the fixed-point map x -> x̃ = H(x) has residual r = x̃ − x. From
 // passes i, i+1 the secant pairs Δr = r_{i+1} − r_i, Δx̃ = x̃_{i+1} − x̃_i form the columns of
@@ -269,8 +295,12 @@ void Scheduler::export_state(StateArchive& a, const std::string& prefix) const {
     for (const Stage& s : stages_)
       for (const Transfer& tr : s.after) {
         if (tr.relaxed && !previous_[k].empty()) a.put(prefix + "written/" + std::to_string(k), previous_[k]);
+        if (tr.relaxed && !written_before_[k].empty())
+          a.put(prefix + "written_before/" + std::to_string(k), written_before_[k]);
         ++k;
       }
+    if (options_.first_pass_predictor == FirstPassPredictor::linear)
+      a.put_scalar(prefix + "last_interval_ms", last_interval_ms_);
   }
   // IQN-ILS's secant columns (the next interval reuses them): per transfer, the column count of
   // each interval (newest first) and the columns concatenated
@@ -324,8 +354,16 @@ void Scheduler::import_state(const StateArchive& a, const std::string& prefix) {
           previous_[k] = a.get(key);
           tr.write(previous_[k]);
         }
+        const std::string before = prefix + "written_before/" + std::to_string(k);
+        written_before_[k] = tr.relaxed && a.has(before) ? a.get(before) : std::vector<double>{};
         ++k;
       }
+    if (options_.first_pass_predictor == FirstPassPredictor::linear) {
+      if (!a.has(prefix + "last_interval_ms"))
+        throw InputError("checkpoint: no entry '" + prefix + "last_interval_ms': it was written without "
+                         "first_pass_predictor = linear");
+      last_interval_ms_ = a.scalar(prefix + "last_interval_ms");
+    }
   }
   for (std::size_t k = 0; k < iqn_.size(); ++k) {
     QuasiNewtonMemory& q = iqn_[k];
@@ -380,6 +418,7 @@ void Scheduler::advance_to(double t_ms) {
       run_pass(t_end, -1);
     } else {
       for (Stage& s : stages_) s.module->save();
+      if (options_.first_pass_predictor == FirstPassPredictor::linear) predict(t_end - time_ms_);
       double residual = 0;
       bool converged = false;
       for (int it = 0; it < options_.strong_max_iterations; ++it) {
@@ -394,6 +433,7 @@ void Scheduler::advance_to(double t_ms) {
       if (!converged && options_.strong_max_iterations > 1) ++stats_.unconverged_intervals;
       if (options_.strong_max_iterations > 1) stats_.max_final_residual = std::max(stats_.max_final_residual, residual);
     }
+    last_interval_ms_ = t_end - time_ms_;
     time_ms_ = t_end;
     ++stats_.intervals;
   }

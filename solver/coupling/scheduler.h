@@ -47,6 +47,7 @@ struct Stage {
 
 enum class CouplingMode { loose, strong };
 enum class Relaxation { none, constant, aitken, iqn_ils };
+enum class FirstPassPredictor { last, linear };
 
 struct SchedulerOptions {
   double sync_step_ms = 1.0;              // Δt_sync, > 0
@@ -76,6 +77,16 @@ struct SchedulerOptions {
   // The data last written by the relaxed transfers are part of the checkpoint (export_state),
   // and import_state writes them again, so a resumed run takes the same passes.
   bool first_pass_residual = false;
+  // With first_pass_residual (ours): what the relaxed transfers write before an interval's first
+  // pass. last: the data last written (the loads lag one interval: the one-pass intervals are
+  // explicit coupling, whose lag can pump a slow oscillation that changes the data by less than
+  // the tolerance per interval). linear: extrapolated from the last two intervals' final data,
+  //   x* = x_n + (h_{n+1} / h_n) (x_n − x_{n−1}),
+  // so the first pass starts from a second-order guess of the interval's loads and its residual
+  // measures the guess. Explicit coupling with this guess is stable for an added-mass ratio below
+  // 1/3 only (against 1 for last): the first-pass check and the further passes must catch such
+  // modes (tests/coupling/coupling_verification_test.cc).
+  FirstPassPredictor first_pass_predictor = FirstPassPredictor::last;
   // The smallest step a module may report before the run is declared unstable (a collapsing
   // stable step means a blow-up in the making) (ours).
   double min_step_ms = 1e-9;
@@ -128,6 +139,9 @@ class Scheduler {
   double run_pass(double t_end_ms, int iteration);
   void sub_cycle(std::size_t stage, double t_end_ms);
   double relax(std::size_t transfer, bool relaxed_transfer, int iteration);
+  // first_pass_predictor = linear: writes the relaxed transfers' extrapolated data for the
+  // interval of length interval_ms about to start.
+  void predict(double interval_ms);
   // IQN-ILS's update of transfer k's data x from the raw data and residual r of this pass.
   void quasi_newton(std::size_t k, const std::vector<double>& raw, const std::vector<double>& r, int iteration);
 
@@ -139,6 +153,10 @@ class Scheduler {
   // previous residual (Aitken).
   std::vector<std::vector<double>> current_, previous_, previous_residual_;
   std::vector<double> aitken_;  // Aitken's factor per transfer
+  // first_pass_predictor = linear, per transfer: the final data of the interval before the last
+  // (x_{n−1}), and the last interval's length h_n (0: none yet)
+  std::vector<std::vector<double>> written_before_;
+  double last_interval_ms_ = 0;
   // IQN-ILS per transfer: raw data of the last pass; secant columns (Δr, Δx̃) of this interval
   // and of earlier ones, newest first.
   struct SecantColumns {

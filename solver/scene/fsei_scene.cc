@@ -416,6 +416,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (fs.coupling_order == "structure_first" && !fs.strong_coupling)
     throw InputError("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true (its point is "
                      "strong coupling's first-pass check); with loose coupling use \"fluid_first\"");
+  if (fs.first_pass_predictor != "last" && fs.first_pass_predictor != "linear")
+    throw InputError("fsei.first_pass_predictor = \"" + fs.first_pass_predictor + "\" is not one of: last, linear");
+  if (fs.first_pass_predictor == "linear" && fs.coupling_order != "structure_first")
+    throw InputError("fsei.first_pass_predictor = \"linear\" needs fsei.coupling_order = \"structure_first\" (it "
+                     "guesses the loads the shells take before the fluid makes them); got \"" + fs.coupling_order + "\"");
   if (fs.sync_interval == "fixed" && fs.fluid_steps_per_interval != 1)
     throw InputError("fsei.fluid_steps_per_interval = " + std::to_string(fs.fluid_steps_per_interval) +
                      " needs fsei.sync_interval = \"fluid_step\"; with fixed intervals (of fsei.sync_step_ms) leave it at 1");
@@ -880,6 +885,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // structure_first: the shells consume the loads before the fluid makes them, so a pass's
   // change of the loads is a fixed-point residual from the first pass on (ours)
   so.first_pass_residual = structure_first;
+  so.first_pass_predictor =
+      fs.first_pass_predictor == "linear" ? coupling::FirstPassPredictor::linear : coupling::FirstPassPredictor::last;
   // A resumed run: the fluid, the shells and the scheduler where the checkpoint left them, and
   // the markers on the shells' nodes (what the last interval's transfer had set)
   if (resume_from) {

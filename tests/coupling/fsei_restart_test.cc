@@ -17,6 +17,8 @@
 // SCENE fsi_structure_first / fsei_structure_first: fsi_carry_over's numerics on fsi / fsei with
 // fsei.coupling_order = structure_first: the loads last written are checkpointed (the shells
 // use them in the next interval's first pass) and fsi's scene clock is restored.
+// SCENE fsi_linear_guess: fsi_structure_first with fsei.first_pass_predictor = linear: the loads
+// of the interval before the last and the last interval's length are checkpointed too.
 #include <mpi.h>
 
 #include <cmath>
@@ -50,7 +52,8 @@ class Control final : public scene::RunControl {
 // SCENE "fsi_carry_over": scene fsi with the carry-over forcing, whose carried force is state,
 // strong IQN-ILS coupling and intervals following the fluid's step.
 RunResult run_case(const std::string& scene, const std::filesystem::path& out, const std::filesystem::path& checkpoint) {
-  const bool structure_first = scene.ends_with("_structure_first");
+  const bool linear_guess = scene.ends_with("_linear_guess");
+  const bool structure_first = scene.ends_with("_structure_first") || linear_guess;
   const bool carry_over = scene == "fsi_carry_over" || structure_first;
   const std::string base = scene.starts_with("fsei") ? "fsei" : "fsi";
   nlohmann::json doc = {
@@ -64,6 +67,7 @@ RunResult run_case(const std::string& scene, const std::filesystem::path& out, c
     doc["coupling"] = {{"relaxation", "iqn_ils"}, {"strong_tolerance", 1e-2}, {"strong_max_iterations", 12}};
   }
   if (structure_first) doc["fsei"]["coupling_order"] = "structure_first";
+  if (linear_guess) doc["fsei"]["first_pass_predictor"] = "linear";
   const config::Scenario s = config::parse_scenario(doc);
   Control control(out, checkpoint);
   return scene::run_fsei(s, control);

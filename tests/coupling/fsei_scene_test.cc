@@ -213,6 +213,21 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   const std::string loose = error_of(scenario("fsi", {{"fsei", {{"coupling_order", "structure_first"}}}}));
   EXPECT_NE(loose.find("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"), std::string::npos)
       << loose;
+  // The linear first-pass guess in the seed's order (the fluid makes the loads before the
+  // shells take them: there is nothing to guess).
+  const std::string guess = error_of(scenario(
+      "fsi", {{"fsei", {{"first_pass_predictor", "linear"}, {"strong_coupling", true}}}}));
+  EXPECT_NE(guess.find("fsei.first_pass_predictor = \"linear\" needs fsei.coupling_order = \"structure_first\""),
+            std::string::npos)
+      << guess;
+  std::string predictor = "no error";
+  try {
+    scenario("fsi", {{"fsei", {{"first_pass_predictor", "quadratic"}}}});
+  } catch (const std::exception& e) {
+    predictor = e.what();
+  }
+  EXPECT_NE(predictor.find("fsei.first_pass_predictor"), std::string::npos) << predictor;
+  EXPECT_NE(predictor.find("linear"), std::string::npos) << predictor;
 }
 
 // The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
