@@ -559,8 +559,13 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(fsei.end_time_ms, "ms", 0, 0, 1e6,
                            "Scenes 'fsei'/'fsi': simulated time from the start of systole; 0: beats x period."));
   t.push_back(SYSTOLE_REAL(fsei.prescribed_peak_tension_kpa, "kPa", 60, 0, 1000,
-                           "Scene 'fsi': peak active tension of the prescribed LV and LA waveform (the 0-D "
-                           "activation shape, lumped timing; ours)."));
+                           "Scene 'fsi': peak active tension of the prescribed LV waveform (the 0-D activation "
+                           "shape, lumped timing; ours); the LA's is this times "
+                           "fsei.prescribed_la_tension_fraction."));
+  t.push_back(SYSTOLE_REAL(fsei.prescribed_la_tension_fraction, "-", 1, 0, 2,
+                           "Scene 'fsi': the LA's peak prescribed tension over the LV's (ours; 1: the same "
+                           "peak, as before session 22; at 120 kPa the LA's contraction peaks at 46 mmHg, "
+                           "docs/fsei.md session 22)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fsei.probe_radius_mm, "mm", 4, 0, 20,
                                     "Scenes 'fsei'/'fsi': radius of the pressure probe spheres in the LV, LA, aortic "
                                     "root and outer fluid (chamber pressures are their mean pressures, relative to the "

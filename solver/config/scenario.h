@@ -207,7 +207,8 @@ struct Fsei {
   std::string resolution;               // grid preset: coarse, basic, fine, very_fine, custom
   double sync_step_ms;                  // scheduler synchronisation step
   double end_time_ms;                   // 0: beats x period
-  double prescribed_peak_tension_kpa;   // fsi: peak of the activation waveform (ours)
+  double prescribed_peak_tension_kpa;   // fsi: peak of the activation waveform, the LV's (ours)
+  double prescribed_la_tension_fraction;  // fsi: the LA's peak over the LV's (ours)
   double probe_radius_mm;               // pressure probe spheres
   bool strong_coupling;                 // false: loose (the seed's)
   bool forcing_carry_over;              // ibm::ForcingParameters::carry_over (ours)

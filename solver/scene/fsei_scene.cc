@@ -377,6 +377,11 @@ bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase) {
   return phase_ms < end_phase * period_ms - 1e-9;
 }
 
+double prescribed_peak_tension_kpa(const config::Fsei& fsei, Chamber chamber) {
+  return chamber == Chamber::lv ? fsei.prescribed_peak_tension_kpa
+                                : fsei.prescribed_peak_tension_kpa * fsei.prescribed_la_tension_fraction;
+}
+
 namespace {
 // The z plane (cell layer) holding a point at z (grid units), clamped into the grid.
 int plane_of(const grid::Grid& g, double z) {
@@ -733,7 +738,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       std::vector<double> tau(m.node_count(), 0.0);
       const double prescribed =
           ep_tension_kpa ? 0.0
-                         : fs.prescribed_peak_tension_kpa *
+                         : prescribed_peak_tension_kpa(fs, c == 0 ? Chamber::lv : Chamber::la) *
                                (c == 0 ? lv_timing : la_timing).activation(1e-3 * scene_time_ms);
       for (std::size_t i = 0; i < tau.size(); ++i) {
         const std::int32_t e = ep_node[c][i];

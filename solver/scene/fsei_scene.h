@@ -70,6 +70,12 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
 // that beat's start (the limiter holds) and the window's end belongs to the released part.
 bool mitral_limiter_holds(double t_ms, double period_ms, double end_phase);
 
+// Scene fsi: the peak of a chamber's prescribed active tension in kPa: the LV's is
+// fsei.prescribed_peak_tension_kpa, the LA's that times fsei.prescribed_la_tension_fraction
+// (ours). Both chambers follow their 0-D activation shapes (lumped::ChamberTiming) under it.
+enum class Chamber { lv, la };
+double prescribed_peak_tension_kpa(const config::Fsei& fsei, Chamber chamber);
+
 // The work of each z plane of grid g for fsei.slab_split = "balanced" (grid::Slabs'
 // plane_weights; nz entries): its cells (the fluid) plus kIbToFluidWork times the whole grid's
 // cells in proportion to the share of the markers in the plane (by their z: the immersed

@@ -80,6 +80,17 @@ config::Scenario scenario(const std::string& scene, nlohmann::json doc) {
   return config::parse_scenario(doc);
 }
 
+// What parsing the scenario refuses, or "no error" (the parameter table's range and choice
+// checks run at parsing, before any scene).
+std::string parse_error_of(const std::string& scene, nlohmann::json doc) {
+  try {
+    scenario(scene, std::move(doc));
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 std::string error_of(const config::Scenario& s) {
   Quiet control;
   try {
@@ -193,20 +204,10 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   const std::string steps = error_of(scenario("fsi", {{"fsei", {{"fluid_steps_per_interval", 2}}}}));
   EXPECT_NE(steps.find("fsei.fluid_steps_per_interval = 2 needs fsei.sync_interval = \"fluid_step\""), std::string::npos)
       << steps;
-  std::string zero = "no error";
-  try {
-    scenario("fsi", {{"structure", {{"mitral_limiter_end_phase", 0}}}});
-  } catch (const std::exception& e) {
-    zero = e.what();
-  }
+  const std::string zero = parse_error_of("fsi", {{"structure", {{"mitral_limiter_end_phase", 0}}}});
   EXPECT_NE(zero.find("structure.mitral_limiter_end_phase"), std::string::npos) << zero;
   // A coupling order that does not exist.
-  std::string order = "no error";
-  try {
-    scenario("fsi", {{"fsei", {{"coupling_order", "structure_second"}}}});
-  } catch (const std::exception& e) {
-    order = e.what();
-  }
+  const std::string order = parse_error_of("fsi", {{"fsei", {{"coupling_order", "structure_second"}}}});
   EXPECT_NE(order.find("fsei.coupling_order"), std::string::npos) << order;
   EXPECT_NE(order.find("structure_first"), std::string::npos) << order;
   // The shells-first order without strong coupling.
@@ -220,14 +221,24 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   EXPECT_NE(guess.find("fsei.first_pass_predictor = \"linear\" needs fsei.coupling_order = \"structure_first\""),
             std::string::npos)
       << guess;
-  std::string predictor = "no error";
-  try {
-    scenario("fsi", {{"fsei", {{"first_pass_predictor", "quadratic"}}}});
-  } catch (const std::exception& e) {
-    predictor = e.what();
-  }
+  const std::string predictor = parse_error_of("fsi", {{"fsei", {{"first_pass_predictor", "quadratic"}}}});
   EXPECT_NE(predictor.find("fsei.first_pass_predictor"), std::string::npos) << predictor;
   EXPECT_NE(predictor.find("linear"), std::string::npos) << predictor;
+}
+
+// Scene fsi's prescribed tension: the LA's peak is its fraction of the LV's (ours; the default
+// 1 keeps one peak for both); a fraction outside [0, 2] is refused by name at parsing.
+TEST(FseiScene, TheLAsPrescribedPeakIsItsFractionOfTheLVs) {
+  const config::Scenario same = scenario("fsi", {{"fsei", {{"prescribed_peak_tension_kpa", 100}}}});
+  EXPECT_EQ(prescribed_peak_tension_kpa(same.fsei, Chamber::lv), 100);
+  EXPECT_EQ(prescribed_peak_tension_kpa(same.fsei, Chamber::la), 100);
+  const config::Scenario third = scenario(
+      "fsi", {{"fsei", {{"prescribed_peak_tension_kpa", 90}, {"prescribed_la_tension_fraction", 1.0 / 3}}}});
+  EXPECT_EQ(prescribed_peak_tension_kpa(third.fsei, Chamber::lv), 90);
+  EXPECT_NEAR(prescribed_peak_tension_kpa(third.fsei, Chamber::la), 30, 1e-12);
+  const std::string big = parse_error_of("fsi", {{"fsei", {{"prescribed_la_tension_fraction", 2.5}}}});
+  EXPECT_NE(big.find("fsei.prescribed_la_tension_fraction"), std::string::npos) << big;
+  EXPECT_NE(big.find("2.5"), std::string::npos) << big;
 }
 
 // The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
