@@ -14,6 +14,7 @@
 
 #include "proto/bridge/scenario_bridge.h"
 #include "solver/config/parameter_table.h"
+#include "solver/core/allocator.h"
 #include "solver/core/errors.h"
 #include "solver/io/result_writer.h"
 #include "solver/scene/scene.h"
@@ -50,9 +51,13 @@ class ConsoleControl final : public scene::RunControl {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const bool heap_policy = systole::keep_freed_memory_in_heap();  // before any large array
   MPI_Init(&argc, &argv);
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (!heap_policy && rank == 0)
+    std::cerr << "systole-solve: warning: glibc refused the heap policy (solver/core/allocator.h); "
+                 "large runs will be slower, their values are unchanged\n";
   CLI::App app{"systole-solve: run a systole scenario locally and write its results"};
   std::string file, out_dir, checkpoint_dir;
   std::vector<std::string> sets;

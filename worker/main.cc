@@ -23,6 +23,7 @@
 
 #include "proto/bridge/scenario_bridge.h"
 #include "service/server/sha256.h"
+#include "solver/core/allocator.h"
 #include "solver/core/errors.h"
 #include "solver/core/version.h"
 #include "solver/io/result_writer.h"
@@ -341,12 +342,15 @@ void run_job(MPI_Comm comm, int rank, v1::WorkerApi::Stub* stub, const std::stri
 }  // namespace
 
 int main(int argc, char** argv) {
+  const bool heap_policy = systole::keep_freed_memory_in_heap();  // before any large array
   int provided = 0;
   MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   int rank = 0;
   int size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (!heap_policy && rank == 0)
+    spdlog::warn("glibc refused the heap policy (solver/core/allocator.h): large jobs will be slower, values unchanged");
 
   CLI::App app{"systole-worker: runs systole jobs leased from a systole-server (start it under mpirun)"};
   std::string server = "127.0.0.1:50051";

@@ -13,6 +13,7 @@
 #include <mpi.h>
 
 #include "solver/config/scenario.h"
+#include "solver/core/allocator.h"
 #include "solver/core/errors.h"
 #include "solver/io/result_writer.h"
 #include "solver/scene/fsei_scene.h"
@@ -38,9 +39,12 @@ class Printer final : public systole::scene::RunControl {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const bool heap_policy = systole::keep_freed_memory_in_heap();  // before any large array
   MPI_Init(&argc, &argv);
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (!heap_policy && rank == 0)
+    std::fprintf(stderr, "fsei_case: warning: glibc refused the heap policy (solver/core/allocator.h): slower, same values\n");
   int rc = 0;
   try {
     if (argc < 2 || (std::string(argv[1]) != "fsi" && std::string(argv[1]) != "fsei"))
