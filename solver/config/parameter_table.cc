@@ -551,8 +551,10 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_CHOICE(fsei.resolution, "coarse",
                              (std::vector<std::string_view>{"coarse", "basic", "fine", "very_fine", "custom"}),
                              "Scenes 'fsei'/'fsi': fluid grid preset in points: coarse 65x65x73, basic 129x129x145 "
-                             "(the seed's grid 1), fine 193x193x257, very_fine 257x257x290; custom: fluid.nx/ny/nz. "
-                             "The markers' tiling follows the grid."));
+                             "(the seed's grid 1), fine 193x193x257, very_fine 257x257x290 for a 140-mm box; a box "
+                             "of another fluid.box_z_mm keeps the preset's spacing in z, rounded to the coarser whole "
+                             "number of cells (180 mm: coarse 65x65x93, basic 129x129x186; ours); custom: "
+                             "fluid.nx/ny/nz. The markers' tiling follows the grid."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fsei.sync_step_ms, "ms", 0.1, 0, 5,
                                     "Scenes 'fsei'/'fsi': synchronisation step of the multirate scheduler (fsei: a "
                                     "multiple of electro.time_step_ms); also the fluid's largest step."));
@@ -684,8 +686,19 @@ std::vector<Param> build_table() {
                            "time where the caller keeps checkpoints (a worker: per job, so a requeued job resumes; "
                            "systole-solve --checkpoint-dir); a run finding a checkpoint of the same scenario there "
                            "resumes from it, bitwise as the straight run (docs/fsei.md). 0: none."));
+  t.push_back(SYSTOLE_CHOICE(fsei.defaults, "calibrated", (std::vector<std::string_view>{"calibrated", "seed"}),
+                             "Scenes 'fsei'/'fsi': the defaults of the fields a scenario leaves out. calibrated "
+                             "(ours): the setting of the beats recorded in docs/fsei.md, shown in parentheses in "
+                             "this table's default column (the divergence-free kernel with the carry-over forcing, "
+                             "strong IQN-ILS coupling at the fluid's step with the shells first, the aorta "
+                             "pre-stressed for a quarter of its ground pressure, the tissue at 3 g/ml, 120 kPa of "
+                             "prescribed tension with the LA at 0.4 of it, a 180-mm box). seed: every field's own "
+                             "default, the seed's values where the seed gives one; with them the closed aortic valve "
+                             "crumples within 35 ms (docs/fsei.md, sessions 9-14). A field the scenario sets is "
+                             "never replaced."));
   return t;
 }
+
 
 #undef SYSTOLE_REAL
 #undef SYSTOLE_POSITIVE_REAL
@@ -700,6 +713,50 @@ std::string format_number(double v) {
 }
 
 }  // namespace
+
+const std::vector<SceneDefault>& fsei_calibrated_defaults() {
+  // Run la4's setting (docs/fsei.md, sessions 14-23), field by field; every value is in its
+  // field's range (tests/unit/config_test.cc parses the layer).
+  static const std::vector<SceneDefault> layer{
+      // the immersed boundary: closed walls (session 14) that hold their forcing (sessions 12, 16)
+      {"fsei.forcing_kernel", "divergence_free"},
+      {"fsei.forcing_carry_over", "true"},
+      {"fsei.forcing_carry_over_exclusion_cells", "2"},
+      {"fsei.forcing_carry_over_exclusion_plane", "false"},
+      // the coupling: strong, IQN-ILS, one fluid step per interval, the shells first (sessions 10, 19-21)
+      {"fsei.strong_coupling", "true"},
+      {"coupling.relaxation", "iqn_ils"},
+      {"coupling.strong_tolerance", "0.01"},
+      {"coupling.strong_max_iterations", "12"},
+      {"fsei.sync_interval", "fluid_step"},
+      {"fsei.coupling_order", "structure_first"},
+      {"fsei.first_pass_predictor", "linear"},
+      // the aorta and its afterload (sessions 11, 16)
+      {"fsei.aortic_pretension", "prestress"},
+      {"fsei.aortic_pressure_ramp_ms", "20"},
+      {"fsei.aortic_prestress_fraction", "0.25"},
+      {"tissue.aorta.fung_c_pa", "4312"},
+      {"fluid.darcy_permeability", "0.016"},
+      {"fluid.box_z_mm", "180"},
+      // the tissue and the valves (sessions 8-15)
+      {"tissue.density_g_per_ml", "3"},
+      {"geometry.valve_gap_mm", "1"},
+      {"electromechanics.bending", "true"},
+      {"structure.area_floor", "0.5"},
+      {"structure.strain_limit", "0.75"},
+      {"structure.aortic_cusp_radius_limit", "1.15"},
+      // the prescribed activation of scene fsi (sessions 21-23)
+      {"fsei.prescribed_peak_tension_kpa", "120"},
+      {"fsei.prescribed_la_tension_fraction", "0.4"},
+  };
+  return layer;
+}
+
+const SceneDefault* find_fsei_calibrated_default(std::string_view path) {
+  for (const SceneDefault& d : fsei_calibrated_defaults())
+    if (d.path == path) return &d;
+  return nullptr;
+}
 
 const std::vector<Param>& parameter_table() {
   static const std::vector<Param> table = build_table();  // immutable after construction
@@ -749,7 +806,8 @@ std::string parameters_markdown() {
   out << "# Scenario parameters\n\n"
       << "Generated by `systole-solve --list-parameters` from solver/config/parameter_table.cc; "
          "do not edit by hand.\nDefaults are the seed's healthy left heart at 70 bpm "
-         "(../shared/MODEL.md).\n\n"
+         "(../shared/MODEL.md); scenes fsi and fsei take the value in parentheses instead unless the "
+         "scenario sets the field or `fsei.defaults = seed` (the calibrated setting of docs/fsei.md).\n\n"
       << "| field | unit | default | allowed | meaning |\n|---|---|---|---|---|\n";
   for (const Param& p : parameter_table()) {
     std::string def;
@@ -762,6 +820,7 @@ std::string parameters_markdown() {
       case Kind::kRealList:
       case Kind::kChoiceList: def = "[]"; break;
     }
+    if (const SceneDefault* d = find_fsei_calibrated_default(p.path)) def += " (fsi/fsei: " + std::string(d->value) + ")";
     out << "| `" << p.path << "` | " << (p.unit.empty() ? "-" : std::string(p.unit)) << " | " << def
         << " | " << describe_allowed(p) << " | " << p.doc << " |\n";
   }

@@ -45,6 +45,20 @@ const Param* find_parameter(std::string_view path);
 // Human-readable allowed values: "[20, 240]", "one of: loose, strong", ...
 std::string describe_allowed(const Param& param);
 
+// A scene's own default for one field (ours): `value` in apply_override's syntax ("true", "0.25",
+// "divergence_free").
+struct SceneDefault {
+  std::string_view path;
+  std::string_view value;
+};
+
+// Scenes fsi and fsei with fsei.defaults = calibrated: these replace the table's defaults before
+// the scenario's own fields are read (parse_scenario), so a field the scenario sets always wins.
+const std::vector<SceneDefault>& fsei_calibrated_defaults();
+
+// nullptr if the layer leaves `path` at the table's default.
+const SceneDefault* find_fsei_calibrated_default(std::string_view path);
+
 // Markdown reference of every parameter (docs/parameters.md).
 std::string parameters_markdown();
 

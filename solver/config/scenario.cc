@@ -3,6 +3,7 @@
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "solver/config/geometry_rules.h"
 #include "solver/config/parameter_table.h"
@@ -260,6 +261,18 @@ std::string join_errors(const std::vector<std::string>& errors) {
   return out;
 }
 
+// Scenes fsi/fsei take the calibrated layer unless the document asks for fsei.defaults = "seed"
+// (a value that is not a known choice is reported by walk(); the layer does not matter then).
+bool takes_fsei_calibrated_defaults(const nlohmann::json& document) {
+  const auto scene = document.find("scene");
+  if (scene == document.end() || !scene->is_string()) return false;
+  if (*scene != "fsi" && *scene != "fsei") return false;
+  const auto fsei = document.find("fsei");
+  if (fsei == document.end() || !fsei->is_object()) return true;
+  const auto choice = fsei->find("defaults");
+  return choice == fsei->end() || !choice->is_string() || *choice != "seed";
+}
+
 }  // namespace
 
 Scenario default_scenario() {
@@ -283,6 +296,13 @@ Scenario parse_scenario(const nlohmann::json& document) {
     throw InputError("invalid scenario: the document must be a JSON object, got " + show(document));
   Scenario s = default_scenario();
   std::vector<std::string> errors;
+  if (takes_fsei_calibrated_defaults(document)) {
+    nlohmann::json layer = nlohmann::json::object();
+    for (const SceneDefault& d : fsei_calibrated_defaults())
+      apply_override(layer, std::string(d.path) + "=" + std::string(d.value));
+    walk(layer, "", s, errors);
+    if (!errors.empty()) throw std::logic_error("fsei_calibrated_defaults(): " + join_errors(errors));
+  }
   walk(document, "", s, errors);
   if (errors.empty()) check_consistency(s, errors);
   if (!errors.empty()) throw InputError(join_errors(errors));

@@ -232,6 +232,7 @@ struct Fsei {
   std::string coupling_order;           // "fluid_first" | "structure_first": the stages' order; structure_first
                                         // measures strong coupling's first pass (SchedulerOptions::first_pass_residual) (ours)
   std::string first_pass_predictor;     // "last" | "linear": SchedulerOptions::first_pass_predictor (ours)
+  std::string defaults;                 // "calibrated" | "seed": which defaults fsi/fsei take (parse_scenario; ours)
 };
 
 struct Scenario {

@@ -263,11 +263,18 @@ void add_outer_pressure_loads(const geometry::TriMesh& aorta, const std::vector<
 
 GridPoints fsei_grid_points(const config::Scenario& s) {
   const std::string& r = s.fsei.resolution;
-  if (r == "coarse") return {65, 65, 73};
-  if (r == "basic") return {129, 129, 145};
-  if (r == "fine") return {193, 193, 257};
-  if (r == "very_fine") return {257, 257, 290};
   if (r == "custom") return {s.fluid.nx, s.fluid.ny, s.fluid.nz};
+  // A preset's points are the for the 140-mm box; a box of another height keeps the
+  // preset's spacing in z, rounded to the coarser whole number of cells (ours: at 180 mm, coarse
+  // is 65 x 65 x 93 and basic 129 x 129 x 186, docs/fsei.md's runs t120b/la4 and b1).
+  auto with_z = [&](int nxy, int nz_at_140) {
+    const int cells = static_cast<int>(std::floor((nz_at_140 - 1) * s.fluid.box_z_mm / 140.0 + 1e-9));
+    return GridPoints{nxy, nxy, std::max(cells, 2) + 1};
+  };
+  if (r == "coarse") return with_z(65, 73);
+  if (r == "basic") return with_z(129, 145);
+  if (r == "fine") return with_z(193, 257);
+  if (r == "very_fine") return with_z(257, 290);
   throw InputError("fsei.resolution = \"" + r + "\" is not a preset; allowed: coarse, basic, fine, very_fine, custom");
 }
 

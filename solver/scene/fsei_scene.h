@@ -38,7 +38,8 @@
 
 namespace systole::scene {
 
-// The grid points (nx, ny, nz) of a resolution preset; "custom" takes fluid.nx/ny/nz.
+// The grid points (nx, ny, nz) of a resolution preset (in z following fluid.box_z_mm at the
+// preset's spacing); "custom" takes fluid.nx/ny/nz.
 // Throws InputError naming fsei.resolution for an unknown name.
 struct GridPoints {
   int nx = 0, ny = 0, nz = 0;

@@ -80,6 +80,13 @@ config::Scenario scenario(const std::string& scene, nlohmann::json doc) {
   return config::parse_scenario(doc);
 }
 
+// Tests written against the parameter table's own defaults (the seed's; before session 24 the
+// scenes had no others) say so: fsei.defaults = seed. The calibrated layer has its own tests.
+config::Scenario seed_scenario(const std::string& scene, nlohmann::json doc) {
+  doc["fsei"]["defaults"] = "seed";
+  return scenario(scene, std::move(doc));
+}
+
 // What parsing the scenario refuses, or "no error" (the parameter table's range and choice
 // checks run at parsing, before any scene).
 std::string parse_error_of(const std::string& scene, nlohmann::json doc) {
@@ -101,10 +108,19 @@ std::string error_of(const config::Scenario& s) {
   return "no InputError";
 }
 
+// The issue's points for a 140-mm box; a taller box keeps the spacing in z (the calibrated
+// defaults' 180 mm: the coarse and basic grids of docs/fsei.md's runs t120b/la4 and b1).
 TEST(FseiScene, PresetsAreTheIssuesGrids) {
   auto points = [](const char* preset) {
+    return fsei_grid_points(scenario("fsi", {{"fsei", {{"resolution", preset}}}, {"fluid", {{"box_z_mm", 140}}}}));
+  };
+  auto at_default_box = [](const char* preset) {
     return fsei_grid_points(scenario("fsi", {{"fsei", {{"resolution", preset}}}}));
   };
+  EXPECT_EQ(at_default_box("coarse").nx, 65);
+  EXPECT_EQ(at_default_box("coarse").nz, 93);  // 72 x 180/140 = 92.6 cells: 92, 1.96 mm
+  EXPECT_EQ(at_default_box("basic").nz, 186);  // 144 x 180/140 = 185.1 cells: 185
+  EXPECT_EQ(fsei_grid_points(seed_scenario("fsi", {})).nz, 73);  // the table's 140-mm box
   EXPECT_EQ(points("coarse").nx, 65);
   EXPECT_EQ(points("coarse").nz, 73);
   EXPECT_EQ(points("basic").nx, 129);  // the seed's grid 1
@@ -179,29 +195,28 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
 
 TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   // A grid too coarse for the valves: the message gives the minimum.
-  const std::string coarse = error_of(scenario(
-      "fsi", {{"fsei", {{"resolution", "custom"}}}, {"fluid", {{"nx", 33}, {"ny", 33}, {"nz", 37}}}}));
+  const std::string coarse = error_of(seed_scenario("fsi", {{"fsei", {{"resolution", "custom"}}}, {"fluid", {{"nx", 33}, {"ny", 33}, {"nz", 37}}}}));
   EXPECT_NE(coarse.find("too coarse for the valves"), std::string::npos) << coarse;
   EXPECT_NE(coarse.find("at least 8 are needed"), std::string::npos) << coarse;
   // The heart does not fit the box.
-  const std::string box = error_of(scenario("fsi", {{"fluid", {{"box_x_mm", 50}}}}));
+  const std::string box = error_of(seed_scenario("fsi", {{"fluid", {{"box_x_mm", 50}}}}));
   EXPECT_NE(box.find("box"), std::string::npos) << box;
   // fsei: the synchronisation step must be a whole number of EP steps.
   const std::string sync =
-      error_of(scenario("fsei", {{"fsei", {{"sync_step_ms", 0.075}}}, {"electro", {{"time_step_ms", 0.05}}}}));
+      error_of(seed_scenario("fsei", {{"fsei", {{"sync_step_ms", 0.075}}}, {"electro", {{"time_step_ms", 0.05}}}}));
   EXPECT_NE(sync.find("fsei.sync_step_ms = 0.075"), std::string::npos) << sync;
   EXPECT_NE(sync.find("whole multiple of electro.time_step_ms"), std::string::npos) << sync;
   // The pre-stress's share without the pre-stress.
-  const std::string share = error_of(scenario("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}}));
+  const std::string share = error_of(seed_scenario("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}}));
   EXPECT_NE(share.find("fsei.aortic_prestress_fraction = 0.25"), std::string::npos) << share;
   EXPECT_NE(share.find("needs fsei.aortic_pretension = \"prestress\""), std::string::npos) << share;
   // The mitral limiter's window without the limiter; a window outside (0, 1].
   const std::string window = error_of(
-      scenario("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}}));
+      seed_scenario("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}}));
   EXPECT_NE(window.find("structure.mitral_limiter_end_phase = 0.4"), std::string::npos) << window;
   EXPECT_NE(window.find("needs structure.mitral_limiter = true"), std::string::npos) << window;
   // Several fluid steps per interval without intervals that follow the fluid's step.
-  const std::string steps = error_of(scenario("fsi", {{"fsei", {{"fluid_steps_per_interval", 2}}}}));
+  const std::string steps = error_of(seed_scenario("fsi", {{"fsei", {{"fluid_steps_per_interval", 2}}}}));
   EXPECT_NE(steps.find("fsei.fluid_steps_per_interval = 2 needs fsei.sync_interval = \"fluid_step\""), std::string::npos)
       << steps;
   const std::string zero = parse_error_of("fsi", {{"structure", {{"mitral_limiter_end_phase", 0}}}});
@@ -211,13 +226,12 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   EXPECT_NE(order.find("fsei.coupling_order"), std::string::npos) << order;
   EXPECT_NE(order.find("structure_first"), std::string::npos) << order;
   // The shells-first order without strong coupling.
-  const std::string loose = error_of(scenario("fsi", {{"fsei", {{"coupling_order", "structure_first"}}}}));
+  const std::string loose = error_of(seed_scenario("fsi", {{"fsei", {{"coupling_order", "structure_first"}}}}));
   EXPECT_NE(loose.find("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"), std::string::npos)
       << loose;
   // The linear first-pass guess in the seed's order (the fluid makes the loads before the
   // shells take them: there is nothing to guess).
-  const std::string guess = error_of(scenario(
-      "fsi", {{"fsei", {{"first_pass_predictor", "linear"}, {"strong_coupling", true}}}}));
+  const std::string guess = error_of(seed_scenario("fsi", {{"fsei", {{"first_pass_predictor", "linear"}, {"strong_coupling", true}}}}));
   EXPECT_NE(guess.find("fsei.first_pass_predictor = \"linear\" needs fsei.coupling_order = \"structure_first\""),
             std::string::npos)
       << guess;
@@ -229,11 +243,10 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
 // Scene fsi's prescribed tension: the LA's peak is its fraction of the LV's (ours; the default
 // 1 keeps one peak for both); a fraction outside [0, 2] is refused by name at parsing.
 TEST(FseiScene, TheLAsPrescribedPeakIsItsFractionOfTheLVs) {
-  const config::Scenario same = scenario("fsi", {{"fsei", {{"prescribed_peak_tension_kpa", 100}}}});
+  const config::Scenario same = seed_scenario("fsi", {{"fsei", {{"prescribed_peak_tension_kpa", 100}}}});
   EXPECT_EQ(prescribed_peak_tension_kpa(same.fsei, Chamber::lv), 100);
   EXPECT_EQ(prescribed_peak_tension_kpa(same.fsei, Chamber::la), 100);
-  const config::Scenario third = scenario(
-      "fsi", {{"fsei", {{"prescribed_peak_tension_kpa", 90}, {"prescribed_la_tension_fraction", 1.0 / 3}}}});
+  const config::Scenario third = seed_scenario("fsi", {{"fsei", {{"prescribed_peak_tension_kpa", 90}, {"prescribed_la_tension_fraction", 1.0 / 3}}}});
   EXPECT_EQ(prescribed_peak_tension_kpa(third.fsei, Chamber::lv), 90);
   EXPECT_NEAR(prescribed_peak_tension_kpa(third.fsei, Chamber::la), 30, 1e-12);
   const std::string big = parse_error_of("fsi", {{"fsei", {{"prescribed_la_tension_fraction", 2.5}}}});
@@ -337,8 +350,7 @@ TEST(FseiFields, WssPhaseAverageFileHoldsEveryBodysBins) {
 }
 
 TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
-  const config::Scenario s = scenario(
-      "fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aortic_pressure_mmhg", 0.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
+  const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aortic_pressure_mmhg", 0.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
   Quiet control;
   const RunResult r = run_fsei(s, control);
   for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
@@ -408,24 +420,23 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
 // behind the closed valves, stay near the outer fluid's pressure; the note gives the aorta's
 // blood volume started at it (the default aorta's lumen is ≈ 110 ml by its radii and lengths:
 // root ≈ 16, arch ≈ 50, descending ≈ 43 ml).
-// The first 0.08 T of the heart (70 ms at 70 bpm) in the heaviest-tested working setting of
-// docs/fsei.md (sessions 11-13: fsi at coarse, the aorta pre-stressed to 60 mmHg over a 20 ms
-// ramp with its c read in rho U^2, valve gap 1 mm, tissue density 3 g/ml; the seed's forcing,
-// loose coupling): the isovolumic contraction. The valves stay closed (less than 1 ml through
-// either orifice after the ramp, a stroke volume is ~60 ml), the LV pressure rises steadily
-// (every sample above the one 5 ms before from 25 ms on, by more than 10 mmHg over 30-70 ms:
-// 13.2 measured; the prescribed activation rises slowly, the seed's LV reaches ~80 mmHg when its
-// aortic valve opens) and the
-// aortic root keeps most of its ground pressure. The walls' leak is a known defect (docs/fsei.md:
-// 6.8-7.0 ml/s per mmHg with this forcing, measured in sessions 12-13 on this machine): the bound
-// below, 8 ml/s per mmHg, is a regression guard on that measurement, not the tightness the issue
-// asks for ("nothing leaks"), which is not met. ~4 min on one core.
-TEST(FseiScene, TheFirst70MsContractIsovolumically) {
-  const config::Scenario s = scenario(
-      "fsi", {{"fsei", {{"end_time_ms", 70.0}, {"aortic_pretension", "prestress"}, {"aortic_pressure_ramp_ms", 20.0}}},
-              {"tissue", {{"aorta", {{"fung_c_pa", 4312.0}}}, {"density_g_per_ml", 3.0}}},
-              {"geometry", {{"valve_gap_mm", 1.0}}},
-              {"outputs", {{"time_series_interval_ms", 1.0}}}});
+// The issue's healthy beat in CI-sized form: the first 0.1 T (85 ms at 70 bpm) of scene fsi at
+// its defaults (the calibrated setting, docs/fsei.md: coarse, 65 x 65 x 93 in the 180-mm box),
+// the isovolumic contraction. Asserted from the physics of that phase, not from a run's output:
+// every coupling interval converges and no metric is NaN; both valves are held shut by their
+// pressure differences after the aorta's 20-ms ramp (the root above the LV, the LV above the LA
+// from 25 ms) and pass less than 0.5 ml (aortic) and 1.5 ml (mitral) over 20-85 ms, against a
+// stroke of ~50-70 ml: the closed mitral leaflets billow into the LA as the LV pressure rises and
+// sweep ≈ 1 ml through the annulus' plane (0.95 ml measured in run la4, docs/fsei.md session 23);
+// the LV pressure rises at every sample over the one 5 ms before from 25 ms and passes 40 mmHg by
+// 85 ms (the seed's LV reaches ≈ 80 mmHg when its aortic valve opens; la4: 52 mmHg at 85 ms);
+// and the LV's walls are tight: what it loses beyond its orifices is below 0.5 ml/s per mmHg of
+// its mean pressure (la4: 0.30, 0.45 ml over 20-85 ms; the seed's MLS forcing leaks 6.8-7.0,
+// sessions 12-13) — not zero, a bound on the measured tightness. ~5 min on one core.
+TEST(FseiScene, TheFirstTenthOfABeatAtTheDefaultsContractsBehindClosedValves) {
+  const config::Scenario s = scenario("fsi", {{"fsei", {{"end_time_ms", 85.0}}}, {"outputs", {{"time_series_interval_ms", 1.0}}}});
+  ASSERT_EQ(s.fsei.defaults, "calibrated");
+  ASSERT_EQ(fsei_grid_points(s).nz, 93);
   Quiet control;
   const RunResult r = run_fsei(s, control);
   auto series = [&](const std::string& name) -> const std::vector<double>& {
@@ -436,55 +447,33 @@ TEST(FseiScene, TheFirst70MsContractIsovolumically) {
   };
   const auto& t = series("time_s");
   const auto& p_lv = series("lv_pressure_mmhg");
+  const auto& p_la = series("la_pressure_mmhg");
   const auto& p_ao = series("aortic_root_pressure_mmhg");
   const auto& v_lv = series("lv_volume_ml");
   const auto& q_ao = series("aortic_flow_ml_s");
   const auto& q_mi = series("mitral_flow_ml_s");
-  ASSERT_EQ(t.size(), 71u);
+  ASSERT_EQ(t.size(), 86u);
   for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
+  EXPECT_EQ(r.metrics.at("coupling_unconverged_intervals"), 0.0);
   auto at = [&](double ms) { return static_cast<std::size_t>(std::lround(ms)); };  // 1-ms samples from 0
   double through_ao = 0, through_mi = 0, p_mean = 0;
-  for (std::size_t i = at(20); i < at(70); ++i) {
+  for (std::size_t i = at(20); i < at(85); ++i) {
     through_ao += 0.5e-3 * (q_ao[i] + q_ao[i + 1]);
     through_mi += 0.5e-3 * (q_mi[i] + q_mi[i + 1]);
-    p_mean += 0.5 * (p_lv[i] + p_lv[i + 1]) / 50;
+    p_mean += 0.5 * (p_lv[i] + p_lv[i + 1]) / 65;
   }
-  std::printf("  [measured] 20-70 ms: aortic %.3f ml, mitral %.3f ml; LV %.2f -> %.2f mmHg, %.2f -> %.2f ml; root %.1f mmHg\n",
-              through_ao, through_mi, p_lv[at(20)], p_lv[at(70)], v_lv[at(20)], v_lv[at(70)], p_ao[at(70)]);
-  EXPECT_LT(std::abs(through_ao), 1.0);
-  EXPECT_LT(std::abs(through_mi), 1.0);
+  const double leak_ml = (through_mi - through_ao) - (v_lv[at(85)] - v_lv[at(20)]);
+  std::printf("  [measured] 20-85 ms: aortic %.3f ml, mitral %.3f ml; LV %.2f -> %.2f mmHg, %.3f -> %.3f ml; "
+              "root %.1f mmHg; LV leak %.3f ml at %.2f mmHg mean: %.3f ml/s per mmHg\n",
+              through_ao, through_mi, p_lv[at(20)], p_lv[at(85)], v_lv[at(20)], v_lv[at(85)], p_ao[at(85)], leak_ml, p_mean,
+              leak_ml / 0.065 / p_mean);
+  for (std::size_t i = at(20); i < t.size(); ++i) EXPECT_GT(p_ao[i], p_lv[i]) << "aortic valve, " << t[i] << " s";
+  for (std::size_t i = at(25); i < t.size(); ++i) EXPECT_GT(p_lv[i], p_la[i]) << "mitral valve, " << t[i] << " s";
+  EXPECT_LT(std::abs(through_ao), 0.5);
+  EXPECT_LT(std::abs(through_mi), 1.5);
   for (std::size_t i = at(25); i < t.size(); ++i) EXPECT_GT(p_lv[i], p_lv[i - 5]) << t[i];
-  EXPECT_GT(p_lv[at(70)], p_lv[at(30)] + 10);
-  EXPECT_GT(p_ao[at(70)], 20.0);
-  const double leak_ml = (through_mi - through_ao) - (v_lv[at(70)] - v_lv[at(20)]);
-  const double leak_per_mmhg = leak_ml / 0.05 / p_mean;
-  std::printf("  [measured] LV leak %.3f ml over 20-70 ms at %.2f mmHg mean: %.2f ml/s per mmHg\n", leak_ml, p_mean,
-              leak_per_mmhg);
-  EXPECT_GT(leak_ml, 0.0);  // the sign of the defect: blood leaves through the walls
-  EXPECT_LT(leak_per_mmhg, 8.0);
-  // Seen at the LV's own markers and at the valvular plane's (the slip left after each step, out
-  // of the LV positive): most of the leak, the LV's markers the larger part (docs/fsei.md,
-  // session 13: 1.29 of 2.47 ml at the LV's markers over 70 ms; session 14: the plane's 0.10-0.25
-  // ml per 25 ms against the LV markers' 0.34-0.83 with bending and the area floor).
-  const double slip_ml = r.metrics.at("lv_wall_slip_volume_ml"), lost_ml = -r.metrics.at("lv_volume_balance_ml");
-  const double plane_ml = r.metrics.at("valvular_plane_slip_volume_ml");
-  std::printf("  [measured] 0-70 ms: LV lost %.3f ml beyond its orifices, %.3f ml of it through its own markers, %.3f ml "
-              "through the valvular plane's\n",
-              lost_ml, slip_ml, plane_ml);
-  EXPECT_GT(slip_ml, 0.0);
-  EXPECT_GT(plane_ml, 0.0);
-  EXPECT_GT(slip_ml, plane_ml);
-  EXPECT_LT(slip_ml + plane_ml, lost_ml);
-  // The afterload drains the aorta (aortic_outlet_flow_ml_s, + towards the outlet). Its
-  // resistance is recorded, not asserted (docs/fsei.md session 16): Darcy's law over the outlet's
-  // 33 mm gives 17.3 mmHg s/ml at k = 0.001; measured here 6.8 (2026-12-02): with MLS's leaky wall
-  // the blood leaves the tube inside the region's box, a shorter porous path.
-  const auto& q_out = series("aortic_outlet_flow_ml_s");
-  double root = 0, out = 0;
-  for (std::size_t i = at(40); i <= at(70); ++i) root += p_ao[i], out += q_out[i];
-  std::printf("  [measured] 40-70 ms: root %.1f mmHg, outlet %.2f ml/s: R %.1f mmHg s/ml (Darcy's law 17.3)\n", root / 31,
-              out / 31, root / out);
-  EXPECT_GT(out, 0.0);
+  EXPECT_GT(p_lv[at(85)], 40.0);
+  EXPECT_LT(std::abs(leak_ml) / 0.065 / p_mean, 0.5);
 }
 
 // The divergence-free kernel in the heart (fsei.forcing_kernel, ours; docs/fsei.md session 14):
@@ -512,7 +501,7 @@ TEST(FseiScene, TheDivergenceFreeKernelTightensTheAortasWall) {
                      {"geometry", {{"valve_gap_mm", 1.0}}},
                      {"outputs", {{"time_series_interval_ms", 1.0}}}};
     if (k == 1) j["coupling"] = coupling;
-    const config::Scenario s = scenario("fsi", j);
+    const config::Scenario s = seed_scenario("fsi", j);
     Quiet control;
     const RunResult r = run_fsei(s, control);
     for (const auto& x : r.series) {
@@ -534,7 +523,7 @@ TEST(FseiScene, TheDivergenceFreeKernelTightensTheAortasWall) {
 
 TEST(FseiScene, AortaStartsAtItsGroundPressure) {
   const config::Scenario s =
-      scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}});
+      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}});
   ASSERT_EQ(s.fsei.aortic_pressure_mmhg, 60.0);
   Quiet control;
   const RunResult r = run_fsei(s, control);
@@ -566,11 +555,11 @@ TEST(FseiScene, AortaStartsAtItsGroundPressure) {
 // leaflets', docs/fsei.md session 8); at the default 11.3 Pa no wall holds 60 mmHg within the
 // strain limit, which is an input error naming the body and the limit.
 TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
-  const std::string too_soft = error_of(scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aortic_pretension", "prestress"}}}}));
+  const std::string too_soft = error_of(seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aortic_pretension", "prestress"}}}}));
   EXPECT_NE(too_soft.find("body 'aorta'"), std::string::npos) << too_soft;
   EXPECT_NE(too_soft.find("strain limit"), std::string::npos) << too_soft;
   const config::Scenario s =
-      scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aortic_pretension", "prestress"}}},
+      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aortic_pretension", "prestress"}}},
                        {"tissue", {{"aorta", {{"fung_c_pa", 4312.0}}}}},
                        {"outputs", {{"time_series_interval_ms", 0.1}}}});
   Quiet control;
@@ -591,7 +580,7 @@ TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
   EXPECT_TRUE(noted);
 
   const config::Scenario ramped =
-      scenario("fsi", {{"fsei", {{"end_time_ms", 0.3}, {"aortic_pretension", "prestress"}, {"aortic_pressure_ramp_ms", 20.0}}},
+      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.3}, {"aortic_pretension", "prestress"}, {"aortic_pressure_ramp_ms", 20.0}}},
                        {"tissue", {{"aorta", {{"fung_c_pa", 4312.0}}}}},
                        {"outputs", {{"time_series_interval_ms", 0.1}}}});
   const RunResult q = run_fsei(ramped, control);
@@ -610,7 +599,7 @@ TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
 TEST(FseiScene, FieldFramesAtRequestedPhases) {
   const auto dir = fresh_directory("phases");
   const config::Scenario s =
-      scenario("fsi", {{"heart_rate_bpm", 240.0},
+      seed_scenario("fsi", {{"heart_rate_bpm", 240.0},
                        {"fsei", {{"end_time_ms", 0.3}}},
                        {"outputs", {{"time_series_interval_ms", 0.3}, {"fields", {"velocity"}}, {"field_phases", {0.0008, 0.0004}}}}});
   ToDirectory control(dir);
@@ -633,8 +622,7 @@ TEST(FseiScene, FieldFramesAtRequestedPhases) {
 
 TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
   const auto dir = fresh_directory("fields");
-  const config::Scenario s = scenario(
-      "fsi", {{"fsei", {{"end_time_ms", 0.2}, {"field_interval_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.2}}}});
+  const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.2}, {"field_interval_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.2}}}});
   ToDirectory control(dir);
   const RunResult r = run_fsei(s, control);
   EXPECT_EQ(r.metrics.at("field_frames"), 3.0);
@@ -721,8 +709,7 @@ TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
 // (a strain limit of 0.1 % stops the shells in the first interval).
 TEST(FseiScene, AnUnstableStopLeavesTheBodiesFrame) {
   const auto dir = fresh_directory("unstable");
-  const config::Scenario s = scenario(
-      "fsi", {{"fsei", {{"end_time_ms", 0.5}, {"field_interval_ms", 0.1}}}, {"structure", {{"strain_limit", 0.001}}}});
+  const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.5}, {"field_interval_ms", 0.1}}}, {"structure", {{"strain_limit", 0.001}}}});
   ToDirectory control(dir);
   try {
     run_fsei(s, control);
@@ -749,7 +736,7 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
                           {"outputs", {{"time_series_interval_ms", 0.1}}}};
     doc.merge_patch(extra);
     ToDirectory control({}, dir);
-    return run_fsei(scenario("fsi", doc), control);
+    return run_fsei(seed_scenario("fsi", doc), control);
   };
   const RunResult first = run(0.2, nlohmann::json::object());  // a checkpoint at 0.1 ms
   EXPECT_EQ(first.metrics.at("resumed_from_ms"), 0);
@@ -784,7 +771,7 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
                           {"structure", {{"strain_limit", 0.75}}},
                           {"outputs", {{"time_series_interval_ms", 0.1}}}};
     ToDirectory control(out, dir);
-    const RunResult with_fields = run_fsei(scenario("fsi", doc), control);
+    const RunResult with_fields = run_fsei(seed_scenario("fsi", doc), control);
     EXPECT_NEAR(with_fields.metrics.at("resumed_from_ms"), 0.2, 1e-9);
     EXPECT_EQ(with_fields.metrics.at("field_frames"), 4);
     EXPECT_TRUE(std::filesystem::exists(out / "fsei_fields.xmf"));
@@ -796,7 +783,7 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
 // A checkpoint written while the strain limit was still part of the fingerprint (before session
 // 15) carries its line; a parameter no longer fingerprinted is skipped, the others still count.
 TEST(FseiScene, ACheckpointsFingerprintSkipsParametersNoLongerFingerprinted) {
-  const std::string current = scenario_fingerprint(scenario("fsi", nlohmann::json::object()));
+  const std::string current = scenario_fingerprint(seed_scenario("fsi", nlohmann::json::object()));
   ASSERT_EQ(current.find("structure.strain_limit="), std::string::npos);
   const std::size_t at = current.find("structure.");
   ASSERT_NE(at, std::string::npos);
@@ -819,11 +806,11 @@ TEST(FseiScene, ACheckpointFromBeforeAParameterResumesAtItsDefault) {
     return f;
   };
   const nlohmann::json prestress{{"fsei", {{"aortic_pretension", "prestress"}}}};
-  const std::string current = scenario_fingerprint(scenario("fsi", prestress));
+  const std::string current = scenario_fingerprint(seed_scenario("fsi", prestress));
   const std::string older = without(current, "fsei.aortic_prestress_fraction");
   EXPECT_NO_THROW(check_fingerprint("old", older, current));
   const std::string half = scenario_fingerprint(
-      scenario("fsi", {{"fsei", {{"aortic_pretension", "prestress"}, {"aortic_prestress_fraction", 0.5}}}}));
+      seed_scenario("fsi", {{"fsei", {{"aortic_pretension", "prestress"}, {"aortic_prestress_fraction", 0.5}}}}));
   try {
     check_fingerprint("old", older, half);
     ADD_FAILURE() << "a checkpoint from before the parameter resumed with another value of it";

@@ -156,6 +156,42 @@ TEST(Config, ToJsonRoundTrips) {
   EXPECT_EQ(to_json(parse_scenario(to_json(s))), to_json(s));
 }
 
+// Scenes fsi/fsei take the calibrated layer for what the document leaves out; the document's
+// own fields, fsei.defaults = seed and every other scene keep the table's defaults.
+TEST(Config, FsiAndFseiTakeTheCalibratedDefaultsUnlessTheScenarioSetsTheField) {
+  const nlohmann::json table = to_json(default_scenario());
+  ASSERT_FALSE(fsei_calibrated_defaults().empty());
+  for (const char* scene : {"fsi", "fsei"}) {
+    const nlohmann::json got = to_json(parse_scenario({{"scene", scene}}));
+    for (const SceneDefault& d : fsei_calibrated_defaults()) {
+      nlohmann::json expected = nlohmann::json::object();
+      apply_override(expected, std::string(d.path) + "=" + std::string(d.value));
+      std::string pointer = "/" + std::string(d.path);
+      for (char& c : pointer)
+        if (c == '.') c = '/';
+      const nlohmann::json::json_pointer ptr(pointer);
+      EXPECT_EQ(got[ptr], expected[ptr]) << scene << " " << d.path;
+      EXPECT_NE(got[ptr], table[ptr]) << d.path << ": the layer repeats the table's default";
+    }
+    EXPECT_EQ(got["fsei"]["defaults"], "calibrated");
+  }
+  // A field the scenario sets wins over the layer, at its table default too.
+  const Scenario own = parse_scenario({{"scene", "fsi"}, {"tissue", {{"density_g_per_ml", 1.05}}},
+                                       {"fsei", {{"forcing_kernel", "mls"}}}});
+  EXPECT_EQ(own.tissue.density_g_per_ml, 1.05);
+  EXPECT_EQ(own.fsei.forcing_kernel, "mls");
+  EXPECT_EQ(own.fsei.prescribed_peak_tension_kpa, 120.0);  // the rest stays calibrated
+  // fsei.defaults = seed and the other scenes: the table's defaults.
+  nlohmann::json seed = to_json(parse_scenario({{"scene", "fsi"}, {"fsei", {{"defaults", "seed"}}}}));
+  seed["scene"] = table["scene"];
+  seed["fsei"]["defaults"] = table["fsei"]["defaults"];
+  EXPECT_EQ(seed, table);
+  nlohmann::json em = to_json(parse_scenario({{"scene", "electromechanics"}}));
+  em["scene"] = table["scene"];
+  EXPECT_EQ(em, table);
+  EXPECT_NE(error_of({{"scene", "fsi"}, {"fsei", {{"defaults", "tight"}}}}).find("fsei.defaults"), std::string::npos);
+}
+
 TEST(Config, ParameterMarkdownListsEveryField) {
   const std::string md = parameters_markdown();
   for (const Param& p : parameter_table()) EXPECT_NE(md.find("`" + std::string(p.path) + "`"), std::string::npos) << p.path;
