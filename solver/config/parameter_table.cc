@@ -699,7 +699,6 @@ std::vector<Param> build_table() {
   return t;
 }
 
-
 #undef SYSTOLE_REAL
 #undef SYSTOLE_POSITIVE_REAL
 #undef SYSTOLE_INT
