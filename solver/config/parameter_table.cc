@@ -258,7 +258,17 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(fluid.box_x_mm, "mm", 95, 10, 1000, "Fluid box size in x (periodic)."));
   t.push_back(SYSTOLE_REAL(fluid.box_y_mm, "mm", 95, 10, 1000, "Fluid box size in y (periodic)."));
   t.push_back(SYSTOLE_REAL(fluid.box_z_mm, "mm", 140, 10, 1000, "Fluid box size in z (no-slip walls)."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.cfl, "", 0.2, 0, 1, "Target CFL number."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.cfl, "", 0.2, 0, 1,
+                                    "Target CFL number (not part of an fsi/fsei checkpoint's fingerprint: a run stopped "
+                                    "by the fluid's CFL or energy guard resumes at a smaller one)."));
+  t.push_back(SYSTOLE_CHOICE(fluid.cfl_rule, "component_maxima",
+                             (std::vector<std::string_view>{"component_maxima", "per_cell"}),
+                             "Scenes 'fsi'/'fsei': how the step's CFL number is measured. component_maxima (ours, "
+                             "conservative): dt (max abs(u)/dx + max abs(v)/dy + max abs(w)/dz), each maximum over the "
+                             "whole field; per_cell: dt max over cells of (abs(u)/dx + abs(v)/dy + abs(w)/dz), the "
+                             "local form of "
+                             "the seed's codes (AFiD's CalcMaxCFL), larger steps when the fastest flows of the "
+                             "three directions lie in different places. Not part of a checkpoint's fingerprint."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.max_dt_ms, "ms", 0.1, 0, 10, "Largest fluid time step."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.darcy_permeability, "", 0.001, 0, 1,
                                     "Darcy afterload permeability k, nondimensional (seed 0.001). In scenes 'fsi'/'fsei' "

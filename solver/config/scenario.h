@@ -79,6 +79,7 @@ struct Fluid {
   int nx, ny, nz;
   double box_x_mm, box_y_mm, box_z_mm;
   double cfl;
+  std::string cfl_rule;  // scenes fsi/fsei: fluid::FluidParameters::cfl_rule
   double max_dt_ms;
   double darcy_permeability;
   double carreau_yasuda_mu0_pa_s, carreau_yasuda_mu_inf_pa_s, carreau_yasuda_lambda_s;

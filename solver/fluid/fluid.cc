@@ -36,6 +36,8 @@ void validate(const FluidParameters& p, const grid::Grid& g) {
   if (!(p.cfl > 0 && p.cfl <= 1))
     bad("cfl", p.cfl, "(0, 1] (explicit AB2 advection is unstable beyond CFL ~ 0.5; 1 is the hard limit)");
   if (!(p.max_dt > 0 && std::isfinite(p.max_dt))) bad("max_dt", p.max_dt, "(0, inf) nondimensional");
+  if (p.cfl_rule != "component_maxima" && p.cfl_rule != "per_cell")
+    throw InputError("fluid.cfl_rule = '" + p.cfl_rule + "' is unknown; known: component_maxima, per_cell");
   if (!(p.viscous_safety > 0 && p.viscous_safety <= 1)) bad("viscous_safety", p.viscous_safety, "(0, 1]");
   if (!(p.darcy_permeability > 0 && std::isfinite(p.darcy_permeability)))
     bad("darcy_permeability", p.darcy_permeability, "(0, inf)");
@@ -142,7 +144,8 @@ double FluidSolver::choose_time_step(double t_limit) const {
   const grid::Grid& g = slabs_.grid();
   double dt = par_.max_dt;
   if (par_.adaptive_dt) {
-    const double rate = max_u_ / g.dx() + max_v_ / g.dy() + max_w_ / g.dz();
+    const double rate =
+        par_.cfl_rule == "per_cell" ? max_cell_rate_ : max_u_ / g.dx() + max_v_ / g.dy() + max_w_ / g.dz();
     if (rate > 0) dt = std::min(dt, par_.cfl / rate);
     const double nu = max_viscosity();  // Carreau–Yasuda: the largest ν(γ̇) of the field
     const double lam = 4 / (g.dx() * g.dx()) + 4 / (g.dy() * g.dy()) + 4 / (g.dz() * g.dz());
@@ -472,21 +475,24 @@ void FluidSolver::update_pressure() {
 
 void FluidSolver::check_stability(double dt) {
   const grid::Grid& g = slabs_.grid();
-  double mu = 0, mv = 0, mw = 0, ke = 0, bad = 0;
+  double mu = 0, mv = 0, mw = 0, rate = 0, ke = 0, bad = 0;
+  const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
   for (int k = 0; k < p_.k_count(); ++k)
     for (int j = 0; j < g.ny(); ++j) {
       const auto row = p_.index(0, j, k);
       const double *u = vel_.u.data() + row, *v = vel_.v.data() + row, *w = vel_.w.data() + row;
       for (int i = 0; i < g.nx(); ++i) {
-        mu = std::max(mu, std::abs(u[i]));
-        mv = std::max(mv, std::abs(v[i]));
-        mw = std::max(mw, std::abs(w[i]));
+        const double au = std::abs(u[i]), av = std::abs(v[i]), aw = std::abs(w[i]);
+        mu = std::max(mu, au);
+        mv = std::max(mv, av);
+        mw = std::max(mw, aw);
+        rate = std::max(rate, au * idx + av * idy + aw * idz);
         ke += u[i] * u[i] + v[i] * v[i] + w[i] * w[i];
       }
     }
   if (!std::isfinite(ke)) bad = 1;
-  double local[4] = {mu, mv, mw, bad}, global[4];
-  MPI_Allreduce(local, global, 4, MPI_DOUBLE, MPI_MAX, slabs_.comm());
+  double local[5] = {mu, mv, mw, bad, rate}, global[5];
+  MPI_Allreduce(local, global, 5, MPI_DOUBLE, MPI_MAX, slabs_.comm());
   const double ke_new = 0.5 * global_sum(ke, slabs_.comm()) / static_cast<double>(g.cells());
   const double time_s = time_ * par_.time_scale_s;
   if (global[3] > 0) {
@@ -535,6 +541,7 @@ void FluidSolver::check_stability(double dt) {
   max_u_ = global[0];
   max_v_ = global[1];
   max_w_ = global[2];
+  max_cell_rate_ = global[4];
   kinetic_energy_ = ke_new;
 }
 
@@ -699,6 +706,7 @@ void FluidSolver::save_state(State& out) const {
   out.max_u = max_u_;
   out.max_v = max_v_;
   out.max_w = max_w_;
+  out.max_cell_rate = max_cell_rate_;
   out.steps = steps_;
   out.have_history = have_history_;
 }
@@ -718,6 +726,7 @@ void FluidSolver::restore_state(const State& in) {
   max_u_ = in.max_u;
   max_v_ = in.max_v;
   max_w_ = in.max_w;
+  max_cell_rate_ = in.max_cell_rate;
   steps_ = in.steps;
   have_history_ = in.have_history;
 }

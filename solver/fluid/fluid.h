@@ -3,6 +3,7 @@
 // nondimensional with d_m and U_m (Re = U_m d_m / ν). One FluidSolver owns the fluid state of
 // this rank's slab: velocity at faces, pressure at cell centres, the AB2 history, the Poisson
 // solver. Nothing here knows about hearts: coupling/ adds forces through the body-force hook.
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -33,6 +34,13 @@ struct DarcyRegion {
 struct FluidParameters {
   double reynolds = 3000;           // Re = U_m d_m / ν, (0, 1e7]; seed 3000
   double cfl = 0.2;                 // target CFL number, (0, 1]; seed 0.2
+  // How the CFL number of a velocity field is measured. "component_maxima" (ours, conservative):
+  // Δt (max|u|/dx + max|v|/dy + max|w|/dz), each maximum over the whole field, so the three
+  // may come from three different places. "per_cell" (the seed's codes' local form, e.g. AFiD's
+  // CalcMaxCFL): Δt max over cells of (|u|/dx + |v|/dy + |w|/dz), here at each cell's lower
+  // faces (ours: AFiD averages each cell's two faces). per_cell ≤ component_maxima, equal
+  // when one cell holds all three maxima. The abort on a realised CFL keeps component_maxima.
+  std::string cfl_rule = "component_maxima";
   double max_dt = 0.0025;           // largest step, > 0 (0.1 ms at d_m/U_m = 40 ms)
   bool adaptive_dt = true;          // false: every step is max_dt (convergence studies)
   double viscous_safety = 0.5;      // Δt ≤ viscous_safety/(ν Σ 4/Δ²), (0, 1] (ours)
@@ -131,7 +139,7 @@ class FluidSolver {
     Velocity vel, h_prev;
     grid::CellField p;
     double time = 0, dt_prev = 0, kinetic_energy = 0, nu_max = 0;
-    double max_u = 0, max_v = 0, max_w = 0;  // pick the next Δt
+    double max_u = 0, max_v = 0, max_w = 0, max_cell_rate = 0;  // pick the next Δt
     long steps = 0;
     bool have_history = false;
   };
@@ -160,6 +168,12 @@ class FluidSolver {
   double time() const { return time_; }
   long steps() const { return steps_; }
   double last_dt() const { return dt_prev_; }
+  // The largest |u|, |v|, |w| after the last step (each over its own faces; they set the next
+  // step's CFL bound), nondimensional.
+  std::array<double, 3> max_velocity() const { return {max_u_, max_v_, max_w_}; }
+  // The cell with the largest |u|/dx + |v|/dy + |w|/dz (its lower faces), as
+  // "(i,j,k) = (...) at (x, y, z) mm". Collective.
+  std::string fastest_cell() const;
   const FluidParameters& parameters() const { return par_; }
   const grid::Slabs& slabs() const { return slabs_; }
   const PoissonSolver& poisson() const { return *poisson_; }
@@ -186,9 +200,6 @@ class FluidSolver {
   void project(double dt);                          // ∇²φ = ∇·u*/(αΔt), u = u* − αΔt∇φ (eq 9)
   void update_pressure();                           // p ← p + φ                (eq 10)
   void check_stability(double dt);
-  // Where a CFL or energy abort happened (collective): the cell with the largest local
-  // |u|/dx + |v|/dy + |w|/dz (its lower faces), as "(i,j,k) = (...) at (x, y, z) mm".
-  std::string fastest_cell() const;
 
   const grid::Slabs& slabs_;
   FluidParameters par_;
@@ -205,6 +216,7 @@ class FluidSolver {
   bool have_history_ = false;
   double kinetic_energy_ = 0;
   double max_u_ = 0, max_v_ = 0, max_w_ = 0;  // over faces, after the last step
+  double max_cell_rate_ = 0;                  // max over cells of |u|/dx + |v|/dy + |w|/dz (lower faces)
 };
 
 }  // namespace systole::fluid

@@ -643,6 +643,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   fluid::FluidParameters fp;
   fp.reynolds = units::kSeedVelocity_m_s * units::kSeedLength_m / s.fluid.kinematic_viscosity_m2_per_s;
   fp.cfl = s.fluid.cfl;
+  fp.cfl_rule = s.fluid.cfl_rule;
   fp.max_dt = std::min(s.fluid.max_dt_ms, sync_ms) / kTimeScaleMs;
   fp.darcy_permeability = s.fluid.darcy_permeability;
   // A stable step below 1e-3 of the largest (velocities 1000x the design's) is a blow-up (ours:
@@ -1290,6 +1291,20 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
           << plane_slip.back();
       if (outlet_series) m << " q_out_ml_s " << q_out.back();
       if (desc_series) m << " p_desc_mmhg " << p_desc.back();
+      {  // what sets the fluid's step (CFL bound: the three largest speeds, each over its own faces)
+        const fluid::FluidParameters& fp = fluid.parameters();
+        const double m_s = 1e-3 * fp.length_scale_mm / fp.time_scale_s;
+        const std::array<double, 3> u = fluid.max_velocity();
+        m << " fluid_dt_ms " << 1e3 * fp.time_scale_s * fluid.last_dt() << " max_uvw_m_s " << u[0] * m_s << " "
+          << u[1] * m_s << " " << u[2] * m_s << " fastest " << fluid.fastest_cell();
+        // and the fastest node of the shells (mm/ms = m/s): a body moving fast drags its blood
+        double v_max = 0;
+        std::string v_body = "-";
+        for (std::size_t b = 0; b < group.body_count(); ++b)
+          for (const Vec3& v : group.body(b).velocities_mm_per_ms())
+            if (v.norm() > v_max) v_max = v.norm(), v_body = group.body(b).name();
+        m << " fastest_node_m_s " << v_max << " in " << v_body;
+      }
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();
         m << " passes " << cs.passes << " unconverged " << cs.unconverged_intervals << " of " << cs.intervals

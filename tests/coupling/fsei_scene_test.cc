@@ -743,12 +743,12 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   ASSERT_TRUE(std::filesystem::exists(dir / "latest" / "state.h5"));
   // another scenario: refused, naming the parameter, its value there and here
   try {
-    run(0.2, {{"fluid", {{"cfl", 0.3}}}});
+    run(0.2, {{"fluid", {{"darcy_permeability", 0.002}}}});
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("belongs to another scenario"), std::string::npos) << m;
-    EXPECT_NE(m.find("fluid.cfl="), std::string::npos) << m;
+    EXPECT_NE(m.find("fluid.darcy_permeability="), std::string::npos) << m;
   }
   // a run that ends before the checkpoint: refused
   try {
@@ -762,13 +762,14 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   EXPECT_NEAR(longer.metrics.at("resumed_from_ms"), 0.1, 1e-9);
   EXPECT_NEAR(longer.metrics.at("simulated_time_ms"), 0.3, 1e-9);
   EXPECT_EQ(longer.series.front().values.size(), 4u);  // 0, 0.1 (from the checkpoint), 0.2, 0.3 ms
-  // resumed (at 0.2 ms) with field frames the earlier attempts did not write and a looser strain
-  // limit (neither is part of the fingerprint: a run stopped by the guard resumes with another):
-  // the frames start after the checkpoint, 0.25 … 0.4 ms
+  // resumed (at 0.2 ms) with field frames the earlier attempts did not write, a looser strain
+  // limit and a smaller CFL (none is part of the fingerprint: a run stopped by a guard resumes
+  // with another): the frames start after the checkpoint, 0.25 … 0.4 ms
   const auto out = fresh_directory("checkpoint_fields");
   {
     nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.4}, {"checkpoint_interval_ms", 0.1}, {"field_interval_ms", 0.05}}},
                           {"structure", {{"strain_limit", 0.75}}},
+                          {"fluid", {{"cfl", 0.15}, {"cfl_rule", "per_cell"}}},
                           {"outputs", {{"time_series_interval_ms", 0.1}}}};
     ToDirectory control(out, dir);
     const RunResult with_fields = run_fsei(seed_scenario("fsi", doc), control);
@@ -791,7 +792,7 @@ TEST(FseiScene, ACheckpointsFingerprintSkipsParametersNoLongerFingerprinted) {
   older.insert(at, "structure.strain_limit=0.59999999999999998\n");
   EXPECT_NO_THROW(check_fingerprint("old", older, current));
   std::string other = older;
-  other.replace(other.find("fluid.cfl="), std::string("fluid.cfl=").size(), "fluid.cfl=9");
+  other.replace(other.find("fluid.max_dt_ms="), std::string("fluid.max_dt_ms=").size(), "fluid.max_dt_ms=9");
   EXPECT_THROW(check_fingerprint("old", other, current), InputError);
 }
 
