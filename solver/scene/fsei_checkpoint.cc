@@ -27,8 +27,8 @@ std::string exact(double v) {
   return b;
 }
 
-// What a continued run may change (none of it is the model): the outputs, the run's length, the field and checkpoint
-// intervals, the structure's strain limit (a guard that stops the run, not a parameter of the
+// What a continued run may change (none of it is the model): the outputs, the run's length, the
+// field and checkpoint intervals, the structure's strain limit (a guard that stops the run, not a parameter of the
 // trajectory: the pre-stress does not depend on it either, prestress.h), so a run stopped by it
 // resumes from its last checkpoint with a looser one, the slabs' split over the ranks (like
 // the rank count: the trajectory to round-off), and the fluid's CFL target and rule (ours: the
