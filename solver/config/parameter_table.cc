@@ -269,6 +269,15 @@ std::vector<Param> build_table() {
                              "local form of "
                              "the seed's codes (AFiD's CalcMaxCFL), larger steps when the fastest flows of the "
                              "three directions lie in different places. Not part of a checkpoint's fingerprint."));
+  t.push_back(SYSTOLE_CHOICE(fluid.subgrid_model, "none", (std::vector<std::string_view>{"none", "vreman"}),
+                             "Scenes 'fluid'/'fsi'/'fsei': subgrid eddy viscosity (ours; the seed's runs are DNS). "
+                             "none: the seed's; vreman: Vreman's model (Phys. Fluids 16, 2004), nu = 1/Re + "
+                             "c sqrt(B_beta / (alpha_ij alpha_ij)) from the resolved velocity gradient, zero in "
+                             "any unidirectional shear flow, O(dx^2) on smooth flows; it damps the grid-scale "
+                             "velocity of an under-resolved jet (docs/fsei.md, session 26). Newtonian only."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fluid.subgrid_constant, "", 0.07, 0, 1,
+                                    "Vreman's constant c (fluid.subgrid_model = vreman); c = 2.5 Cs^2 with the "
+                                    "Smagorinsky constant Cs (0.07: Cs = 0.17)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.max_dt_ms, "ms", 0.1, 0, 10, "Largest fluid time step."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.darcy_permeability, "", 0.001, 0, 1,
                                     "Darcy afterload permeability k, nondimensional (seed 0.001). In scenes 'fsi'/'fsei' "

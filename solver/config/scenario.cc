@@ -193,6 +193,9 @@ void check_fluid_rules(const Scenario& s, std::vector<std::string>& errors) {
     errors.push_back(m.str());
     m.str("");
   }
+  if (f.subgrid_model != "none" && f.viscosity_model != "newtonian")
+    errors.push_back("fluid.subgrid_model = '" + f.subgrid_model + "' needs fluid.viscosity_model = newtonian, not '" +
+                     f.viscosity_model + "' (the eddy viscosity adds to a constant molecular one)");
   if (s.scene != "fluid") return;
   if (f.viscosity_model == "carreau_yasuda" && f.verification_case != "poiseuille" && f.verification_case != "couette")
     errors.push_back("fluid.viscosity_model = 'carreau_yasuda' needs fluid.verification_case = poiseuille or couette "

@@ -80,6 +80,8 @@ struct Fluid {
   double box_x_mm, box_y_mm, box_z_mm;
   double cfl;
   std::string cfl_rule;  // scenes fsi/fsei: fluid::FluidParameters::cfl_rule
+  std::string subgrid_model;  // fluid::FluidParameters::subgrid_model ("none" | "vreman", ours)
+  double subgrid_constant;    // fluid::FluidParameters::subgrid_constant (Vreman's c)
   double max_dt_ms;
   double darcy_permeability;
   double carreau_yasuda_mu0_pa_s, carreau_yasuda_mu_inf_pa_s, carreau_yasuda_lambda_s;

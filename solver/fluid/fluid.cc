@@ -50,6 +50,12 @@ void validate(const FluidParameters& p, const grid::Grid& g) {
   if (p.viscosity_model != "newtonian" && p.viscosity_model != "carreau_yasuda")
     throw InputError("fluid.viscosity_model = '" + p.viscosity_model + "' is unknown; known: newtonian, carreau_yasuda");
   if (p.viscosity_model == "carreau_yasuda") validate(p.carreau_yasuda);
+  if (p.subgrid_model != "none" && p.subgrid_model != "vreman")
+    throw InputError("fluid.subgrid_model = '" + p.subgrid_model + "' is unknown; known: none, vreman");
+  if (!(p.subgrid_constant > 0 && p.subgrid_constant <= 1)) bad("subgrid_constant", p.subgrid_constant, "(0, 1]");
+  if (p.subgrid_model != "none" && p.viscosity_model != "newtonian")
+    throw InputError("fluid.subgrid_model = '" + p.subgrid_model + "' needs fluid.viscosity_model = newtonian, not '" +
+                     p.viscosity_model + "'");
   for (std::size_t r = 0; r < p.darcy_regions.size(); ++r) {
     const DarcyRegion& d = p.darcy_regions[r];
     auto inside = [](double lo, double hi, double l) { return 0 <= lo && lo < hi && hi <= l; };
@@ -67,7 +73,8 @@ FluidSolver::FluidSolver(const grid::Slabs& slabs, FluidParameters parameters)
     : slabs_(slabs), par_((validate(parameters, slabs.grid()), std::move(parameters))),
       poisson_(std::make_unique<PoissonSolver>(slabs)), vel_(slabs), p_(slabs), phi_(slabs), rhs_(slabs),
       h_(std::make_unique<Velocity>(slabs)), h_prev_(std::make_unique<Velocity>(slabs)) {
-  if (par_.viscosity_model == "carreau_yasuda") nu_ = std::make_unique<grid::CellField>(slabs);
+  if (par_.viscosity_model == "carreau_yasuda" || par_.subgrid_model != "none")
+    nu_ = std::make_unique<grid::CellField>(slabs);
   apply_velocity_boundary_conditions(vel_);
 }
 
@@ -147,7 +154,7 @@ double FluidSolver::choose_time_step(double t_limit) const {
     const double rate =
         par_.cfl_rule == "per_cell" ? max_cell_rate_ : max_u_ / g.dx() + max_v_ / g.dy() + max_w_ / g.dz();
     if (rate > 0) dt = std::min(dt, par_.cfl / rate);
-    const double nu = max_viscosity();  // Carreau–Yasuda: the largest ν(γ̇) of the field
+    const double nu = max_viscosity();  // Carreau–Yasuda or a subgrid model: the field's largest ν
     const double lam = 4 / (g.dx() * g.dx()) + 4 / (g.dy() * g.dy()) + 4 / (g.dz() * g.dz());
     dt = std::min(dt, par_.viscous_safety / (nu * lam));
     if (dt < par_.abort_min_dt) {
@@ -168,7 +175,7 @@ double FluidSolver::choose_time_step(double t_limit) const {
 }
 
 // ---- the explicit terms, eq 1–2: H = −∇·(u u) + Re⁻¹ ∇²u, at each velocity's own faces ----
-// Carreau–Yasuda: H = −∇·(uu) + ∇·[ν(γ̇)(∇u + ∇uᵀ)], ν from update_viscosity().
+// Carreau–Yasuda or a subgrid model: H = −∇·(uu) + ∇·[ν(∇u + ∇uᵀ)], ν from update_viscosity().
 void FluidSolver::compute_explicit_terms() {
   if (nu_) {
     explicit_terms_kernel<false>();
@@ -240,11 +247,11 @@ void FluidSolver::explicit_terms_kernel() {
   }
 }
 
-// ---- Carreau–Yasuda viscosity (viscosity.h) -------------------------------------------------
-// ν(γ̇) at the cell centres from the current velocity (halos and wall ghosts valid), then the
+// ---- Carreau–Yasuda viscosity, or the Vreman subgrid model (viscosity.h) --------------------
+// ν(γ̇), or 1/Re + ν_e(∇u), at the cell centres from the current velocity (halos and wall ghosts valid), then the
 // halo layer: neighbour slabs and periodic x, y by exchange; at a no-slip wall the ghost cell
 // takes the linear extrapolation 2ν₀ − ν₁ (ours: the wall-edge average is then ν at the wall to
-// second order), clamped to [ν∞, ν0]; at a free-slip wall the mirror value ν₀ (the flow is
+// second order), clamped to [ν∞, ν0] (Vreman: to ≥ 1/Re); at a free-slip wall the mirror value ν₀ (the flow is
 // symmetric there). nu_max_ is the global maximum, ghosts included: it limits the next Δt.
 void FluidSolver::update_viscosity() { nu_max_ = global_max(compute_viscosity(*nu_), slabs_.comm()); }
 
@@ -252,17 +259,29 @@ double FluidSolver::compute_viscosity(grid::CellField& nu) const {
   const grid::Grid& g = slabs_.grid();
   const double idx = 1 / g.dx(), idy = 1 / g.dy(), idz = 1 / g.dz();
   const CarreauYasuda& law = par_.carreau_yasuda;
+  const bool vreman = par_.subgrid_model == "vreman";
+  const double nu_molecular = 1 / par_.reynolds, c = par_.subgrid_constant;
   const auto sj = nu.stride_j(), sk = nu.stride_k();
   const double *u = vel_.u.data(), *v = vel_.v.data(), *w = vel_.w.data();
   double* out = nu.data();
   for (int k = 0; k < nu.k_count(); ++k)
     for (int j = 0; j < g.ny(); ++j) {
       const auto row = nu.index(0, j, k);
-      for (int i = 0; i < g.nx(); ++i)
-        out[row + i] = law.from_shear_rate_squared(strain_rate_squared_at_cell(u, v, w, row + i, sj, sk, idx, idy, idz));
+      if (vreman)
+        for (int i = 0; i < g.nx(); ++i)
+          out[row + i] = nu_molecular + vreman_eddy_viscosity(velocity_gradient_at_cell(u, v, w, row + i, sj, sk, idx,
+                                                                                        idy, idz),
+                                                              g.dx(), g.dy(), g.dz(), c);
+      else
+        for (int i = 0; i < g.nx(); ++i)
+          out[row + i] =
+              law.from_shear_rate_squared(strain_rate_squared_at_cell(u, v, w, row + i, sj, sk, idx, idy, idz));
     }
   grid::exchange_halos(nu, slabs_);
-  const double lo = std::min(law.nu_inf, law.nu0), hi = std::max(law.nu_inf, law.nu0);
+  // The wall ghosts' bounds: the law's range; with a subgrid model at least the molecular ν
+  // (ours: the extrapolated eddy part is cut at zero, never negative).
+  const double lo = vreman ? nu_molecular : std::min(law.nu_inf, law.nu0),
+               hi = vreman ? std::numeric_limits<double>::infinity() : std::max(law.nu_inf, law.nu0);
   auto ghost = [&](const Wall& wall, int g_k, int k0, int k1) {
     for (int j = -1; j <= g.ny(); ++j)
       for (int i = -1; i <= g.nx(); ++i)

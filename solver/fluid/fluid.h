@@ -52,6 +52,11 @@ struct FluidParameters {
   // (the verification cases size their forcing with it).
   std::string viscosity_model = "newtonian";
   CarreauYasuda carreau_yasuda = blood_carreau_yasuda();  // nondimensional; default: blood
+  // Subgrid eddy viscosity (ours; the seed's runs are DNS): "none", or "vreman": ν = 1/reynolds
+  // + ν_e with Vreman's ν_e (viscosity.h) from the resolved gradient, constant subgrid_constant,
+  // through the same divergence-form variable-viscosity term as Carreau–Yasuda. Newtonian only.
+  std::string subgrid_model = "none";
+  double subgrid_constant = 0.07;   // Vreman's c, (0, 1]; 0.07 ≈ 2.5 C_s² with C_s = 0.17
   double time_scale_s = 0.04;       // d_m/U_m, only to report times in seconds
   double length_scale_mm = 24;      // d_m, only to report places in mm
   double abort_cfl = 1.0;           // realised CFL above which a step is declared unstable (ours)
@@ -180,8 +185,8 @@ class FluidSolver {
   std::size_t bytes_allocated() const;
   std::vector<std::string> warnings() const { return poisson_->warnings(); }
   bool variable_viscosity() const { return nu_ != nullptr; }
-  // Carreau–Yasuda: the largest ν over the cells (wall ghosts included) at the start of the
-  // last step, the one that limited its Δt; 1/reynolds when Newtonian.
+  // Carreau–Yasuda or a subgrid model: the largest ν over the cells (wall ghosts included) at the
+  // start of the last step, the one that limited its Δt; 1/reynolds when Newtonian without one.
   double max_viscosity() const { return nu_ ? nu_max_ : 1.0 / par_.reynolds; }
 
  private:
@@ -190,7 +195,7 @@ class FluidSolver {
   void compute_explicit_terms();                    // H = −∇·(uu) + Re⁻¹∇²u   (eq 1–2)
   template <bool kNewtonianViscous>
   void explicit_terms_kernel();                     // advection (+ Re⁻¹∇²u when Newtonian)
-  void update_viscosity();                          // ν(γ̇) at cells + wall ghosts, max ν
+  void update_viscosity();                          // ν at cells + wall ghosts, max ν
   double compute_viscosity(grid::CellField& nu) const;  // → local max ν
   double variable_viscosity_dissipation() const;
   void add_variable_viscous_term();                 // H += ∇·[ν(∇u + ∇uᵀ)]

@@ -4,6 +4,7 @@
 // caller has exchanged halos and applied wall conditions. The discrete Laplacian of the
 // pressure solver equals divergence ∘ gradient, which is what makes the projection exact.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 
@@ -88,6 +89,33 @@ inline double strain_rate_squared_at_cell(const double* u, const double* v, cons
   const double gxz = 0.25 * (exz(q) + exz(q + 1) + exz(q + sk) + exz(q + 1 + sk));
   const double gyz = 0.25 * (eyz(q) + eyz(q + sj) + eyz(q + sk) + eyz(q + sj + sk));
   return 2 * (sxx * sxx + syy * syy + szz * szz) + gxy * gxy + gxz * gxz + gyz * gyz;
+}
+
+// The velocity gradient α_ij = ∂u_j/∂x_i at the centre of the cell with storage index q, as
+// grad[3 i + j]: the diagonal from the face differences across the cell, each off-diagonal
+// derivative from its value at the four cell edges around the centre, averaged (the same
+// averages as strain_rate_squared_at_cell, whose off-diagonals are α_ij + α_ji). Reads one
+// halo layer: valid halos and wall ghosts are the caller's.
+inline std::array<double, 9> velocity_gradient_at_cell(const double* u, const double* v, const double* w,
+                                                       std::ptrdiff_t q, std::ptrdiff_t sj, std::ptrdiff_t sk,
+                                                       double idx, double idy, double idz) {
+  // Σ over the four edges e of f(e) − f(e − back): an edge-averaged difference (× ¼ below).
+  auto edges = [&](const double* f, std::ptrdiff_t back, std::ptrdiff_t s1, std::ptrdiff_t s2) {
+    double sum = 0;
+    for (std::ptrdiff_t e : {q, q + s1, q + s2, q + s1 + s2}) sum += f[e] - f[e - back];
+    return 0.25 * sum;
+  };
+  std::array<double, 9> a;
+  a[0] = (u[q + 1] - u[q]) * idx;       // ∂u/∂x
+  a[4] = (v[q + sj] - v[q]) * idy;      // ∂v/∂y
+  a[8] = (w[q + sk] - w[q]) * idz;      // ∂w/∂z
+  a[3] = edges(u, sj, 1, sj) * idy;     // ∂u/∂y at the xy-edges
+  a[1] = edges(v, 1, 1, sj) * idx;      // ∂v/∂x at the xy-edges
+  a[6] = edges(u, sk, 1, sk) * idz;     // ∂u/∂z at the xz-edges
+  a[2] = edges(w, 1, 1, sk) * idx;      // ∂w/∂x at the xz-edges
+  a[7] = edges(v, sk, sj, sk) * idz;    // ∂v/∂z at the yz-edges
+  a[5] = edges(w, sj, sj, sk) * idy;    // ∂w/∂y at the yz-edges
+  return a;
 }
 
 }  // namespace systole::fluid

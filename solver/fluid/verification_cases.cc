@@ -120,6 +120,8 @@ RunResult run_verification_case(const FluidCaseSpec& spec, MPI_Comm comm,
   par.time_scale_s = spec.time_scale_s;
   par.viscosity_model = spec.viscosity_model;
   par.carreau_yasuda = spec.carreau_yasuda;
+  par.subgrid_model = spec.subgrid_model;
+  par.subgrid_constant = spec.subgrid_constant;
   par.darcy_regions.clear();
   const double re = spec.reynolds;
   Exact exact;

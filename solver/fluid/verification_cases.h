@@ -47,6 +47,10 @@ struct FluidCaseSpec {
   // the cases with a reference solution for it: InputError otherwise).
   std::string viscosity_model = "newtonian";
   CarreauYasuda carreau_yasuda = blood_carreau_yasuda();
+  // FluidParameters::subgrid_model and its constant (ours); every case takes it, its error then
+  // includes the model's O(Δ²) departure from the exact (DNS) solution.
+  std::string subgrid_model = "none";
+  double subgrid_constant = 0.07;
 };
 
 // Runs the case on `comm` (1 rank works without mpirun; every rank calls it and gets the same

@@ -112,4 +112,21 @@ double plane_poiseuille_velocity(const CarreauYasuda& law, double G, double h, d
   return 0.5 * width * sum;
 }
 
+double vreman_eddy_viscosity(const std::array<double, 9>& a, double dx, double dy, double dz, double c) {
+  double aa = 0;
+  for (double x : a) aa += x * x;
+  if (aa == 0) return 0;
+  const double d2[3] = {dx * dx, dy * dy, dz * dz};
+  double b[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j) {
+      double s = 0;
+      for (int m = 0; m < 3; ++m) s += d2[m] * a[3 * m + i] * a[3 * m + j];
+      b[i][j] = s;
+    }
+  const double bb = b[0][0] * b[1][1] - b[0][1] * b[0][1] + b[0][0] * b[2][2] - b[0][2] * b[0][2] +
+                    b[1][1] * b[2][2] - b[1][2] * b[1][2];
+  return bb > 0 ? c * std::sqrt(bb / aa) : 0.0;  // B_β ≥ 0 in exact arithmetic; round-off may not be
+}
+
 }  // namespace systole::fluid

@@ -1,4 +1,6 @@
 #pragma once
+#include <array>
+
 // Shear-thinning (generalised Newtonian) viscosity: the Carreau–Yasuda law (MODEL.md §3,
 // "optional Carreau–Yasuda shear-thinning viscosity"), nondimensional in the fluid's units
 // (lengths d_m, velocities U_m: ν* = μ / (ρ U_m d_m), λ* = λ U_m / d_m), plus the steady
@@ -56,5 +58,16 @@ double shear_rate_for_stress(const CarreauYasuda& law, double stress);
 // quadrature of s(τ) over 64 panels (error ≈ 1e-14 of the peak for the blood law). This solves
 // the 1-D problem exactly up to quadrature: no grid, no time stepping, no 3-D operator.
 double plane_poiseuille_velocity(const CarreauYasuda& law, double body_force, double height, double z);
+
+// Vreman's subgrid eddy viscosity (ours: not in the seed, whose grid-1 run is a DNS; A. W. Vreman,
+// "An eddy-viscosity subgrid-scale model for turbulent shear flow: algebraic theory and
+// applications", Phys. Fluids 16 (2004) 3670–3681):
+//   ν_e = c √(B_β / (α_ij α_ij)),  α_ij = ∂u_j/∂x_i,  β_ij = Σ_m Δ_m² α_mi α_mj,
+//   B_β = β11β22 − β12² + β11β33 − β13² + β22β33 − β23²  (≥ 0),
+// and ν_e = 0 where α = 0. c ≈ 2.5 C_s² with C_s the Smagorinsky constant (Vreman's paper).
+// ν_e vanishes wherever the gradient has rank ≤ 1, e.g. in any unidirectional shear flow
+// (Couette, Poiseuille, a laminar shear layer or boundary layer), and is O(Δ²) on smooth flows.
+// grad[3 i + j] = α_ij = ∂u_j/∂x_i; dx, dy, dz the grid spacings Δ_1..3; c > 0.
+double vreman_eddy_viscosity(const std::array<double, 9>& grad, double dx, double dy, double dz, double c);
 
 }  // namespace systole::fluid

@@ -644,6 +644,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   fp.reynolds = units::kSeedVelocity_m_s * units::kSeedLength_m / s.fluid.kinematic_viscosity_m2_per_s;
   fp.cfl = s.fluid.cfl;
   fp.cfl_rule = s.fluid.cfl_rule;
+  fp.subgrid_model = s.fluid.subgrid_model;
+  fp.subgrid_constant = s.fluid.subgrid_constant;
   fp.max_dt = std::min(s.fluid.max_dt_ms, sync_ms) / kTimeScaleMs;
   fp.darcy_permeability = s.fluid.darcy_permeability;
   // A stable step below 1e-3 of the largest (velocities 1000x the design's) is a blow-up (ours:

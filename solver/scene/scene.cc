@@ -70,6 +70,8 @@ fluid::FluidCaseSpec fluid_case_spec(const config::Scenario& scenario) {
       std::clamp(std::lround(f.end_time_ms / scenario.outputs.time_series_interval_ms), 1L, 100000L));
   spec.time_scale_s = length_m / velocity_m_s;
   spec.viscosity_model = f.viscosity_model;
+  spec.subgrid_model = f.subgrid_model;
+  spec.subgrid_constant = f.subgrid_constant;
   spec.carreau_yasuda = fluid::nondimensional(
       {f.carreau_yasuda_mu0_pa_s, f.carreau_yasuda_mu_inf_pa_s, f.carreau_yasuda_lambda_s, f.carreau_yasuda_n,
        f.carreau_yasuda_a, f.density_kg_per_m3},

@@ -39,6 +39,14 @@ TEST(Decomposition, OneAndTwoRanksGiveTheSameFieldsShearThinning) {
   compare_one_and_two_ranks(p, "carreau_yasuda");
 }
 
+// Vreman's eddy viscosity: the gradient reads the neighbour slab's faces, ν its halos and ghosts.
+TEST(Decomposition, OneAndTwoRanksGiveTheSameFieldsVreman) {
+  FluidParameters p;
+  p.reynolds = 500;
+  p.subgrid_model = "vreman";
+  compare_one_and_two_ranks(p, "vreman");
+}
+
 // Slabs split by weight (grid::weighted_ranges, fsei.slab_split = "balanced"): 2 ranks own 8
 // and 2 of the 10 planes; the transposes, halos and walls still give the one-rank fields.
 TEST(Decomposition, UnevenSlabsGiveTheSameFields) {

@@ -2,11 +2,13 @@
 // stability detector, the Darcy sink, the body-force hook.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "solver/core/errors.h"
 #include "solver/fluid/fluid.h"
@@ -119,6 +121,80 @@ TEST(FluidParameters, BadInputNamesTheField) {
   FluidCaseSpec spec;
   spec.viscosity_model = "carreau_yasuda";  // taylor_green_2d has no reference for it
   EXPECT_THROW(run_verification_case(spec, MPI_COMM_WORLD), InputError);
+}
+
+// ---- Vreman's subgrid eddy viscosity (viscosity.h, operators.h; ours) -----------------------------
+
+// ν_e = c √(B_β/(α:α)) by hand: a unidirectional shear (rank-1 gradient) gives exactly 0; a plane
+// strain diag(1, −1, 0) and a solid rotation (α12 = −1, α21 = 1) both give β11 = β22 = Δ², the
+// rest 0, so B_β = Δ⁴, α:α = 2 and ν_e = c Δ²/√2; with Δx ≠ Δy the strain gives c ΔxΔy/√2; ν_e
+// scales with Δ² and with |α|.
+TEST(Vreman, HandValuesAndZeroInUnidirectionalShear) {
+  const double c = 0.07, h = 0.1;
+  std::array<double, 9> a{};
+  EXPECT_EQ(vreman_eddy_viscosity(a, h, h, h, c), 0.0);  // at rest
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      a = {};
+      a[3 * i + j] = 2.5;  // ∂u_j/∂x_i alone: a shear (i ≠ j) or a 1-D stretch (i = j)
+      EXPECT_EQ(vreman_eddy_viscosity(a, h, 0.7 * h, 1.3 * h, c), 0.0) << i << j;
+    }
+  a = {};
+  a[0] = 1, a[4] = -1;  // plane strain
+  EXPECT_NEAR(vreman_eddy_viscosity(a, h, h, h, c), c * h * h / std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(vreman_eddy_viscosity(a, h, 2 * h, h, c), c * h * 2 * h / std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(vreman_eddy_viscosity(a, 2 * h, 2 * h, 2 * h, c), 4 * vreman_eddy_viscosity(a, h, h, h, c), 1e-15);
+  for (double& x : a) x *= 3;
+  EXPECT_NEAR(vreman_eddy_viscosity(a, h, h, h, c), 3 * c * h * h / std::sqrt(2.0), 1e-15);
+  a = {};
+  a[1] = 1, a[3] = -1;  // solid-body rotation about z: α01 = ∂v/∂x = 1, α10 = ∂u/∂y = −1
+  EXPECT_NEAR(vreman_eddy_viscosity(a, h, h, h, c), c * h * h / std::sqrt(2.0), 1e-15);
+}
+
+// velocity_gradient_at_cell is exact on a linear field u_j = Σ_i G_ij x_i sampled at the MAC faces.
+TEST(Vreman, TheCellGradientIsExactOnALinearField) {
+  const int n = 4;  // a 4³ block, the cell (1,1,1) read with its neighbours
+  const double dx = 0.3, dy = 0.5, dz = 0.7;
+  const double G[3][3] = {{0.3, -1.2, 0.7}, {2.1, 0.4, -0.5}, {-0.8, 1.6, -0.7}};  // G[i][j] = ∂u_j/∂x_i
+  std::vector<double> u(n * n * n), v(n * n * n), w(n * n * n);
+  auto lin = [&](int comp, double x, double y, double z) { return G[0][comp] * x + G[1][comp] * y + G[2][comp] * z; };
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const std::size_t q = static_cast<std::size_t>(i + n * (j + n * k));
+        u[q] = lin(0, i * dx, (j + 0.5) * dy, (k + 0.5) * dz);  // x-face (i, j, k)
+        v[q] = lin(1, (i + 0.5) * dx, j * dy, (k + 0.5) * dz);  // y-face
+        w[q] = lin(2, (i + 0.5) * dx, (j + 0.5) * dy, k * dz);  // z-face
+      }
+  const std::ptrdiff_t q = 1 + n * (1 + n * 1);
+  const auto a = velocity_gradient_at_cell(u.data(), v.data(), w.data(), q, n, n * n, 1 / dx, 1 / dy, 1 / dz);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[3 * i + j], G[i][j], 1e-13) << i << j;
+}
+
+TEST(Vreman, BadParametersAreNamed) {
+  const Grid g(BoxSpec{8, 8, 8, 1, 1, 1});
+  auto message = [&](const FluidParameters& p) {
+    try {
+      validate(p, g);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  FluidParameters p;
+  p.subgrid_model = "smagorinsky";
+  EXPECT_NE(message(p).find("fluid.subgrid_model = 'smagorinsky' is unknown; known: none, vreman"), std::string::npos)
+      << message(p);
+  p.subgrid_model = "vreman";
+  EXPECT_EQ(message(p), "");
+  p.subgrid_constant = 0;
+  EXPECT_NE(message(p).find("fluid.subgrid_constant"), std::string::npos) << message(p);
+  p.subgrid_constant = 0.07;
+  p.viscosity_model = "carreau_yasuda";
+  EXPECT_NE(message(p).find("fluid.subgrid_model = 'vreman' needs fluid.viscosity_model = newtonian"),
+            std::string::npos)
+      << message(p);
 }
 
 // ---- Carreau–Yasuda (viscosity.h) ---------------------------------------------------------------
