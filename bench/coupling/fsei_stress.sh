@@ -7,24 +7,43 @@
 # limit 1 and is refused at input, which the table shows). Runs go PARALLEL at a time, one rank
 # each. Each run must either complete with finite metrics or stop with a diagnosis naming the
 # module, the place and the time; anything else (a crash, a NaN metric, a hang past TIMEOUT_S) is
-# marked BAD. The stiffness factor scales each tissue's Fung c from its value at the defaults
-# (the table's, the aorta's 4312 Pa from the calibrated layer) unless C_LV, C_LA, C_LEAFLETS or
-# C_AORTA (Pa) give another base. EXTRA adds path=value settings to every run; RATES, STIFFNESS
-# and STEPS choose the levels (a reduced design runs a subset).
-#   [END_PHASE=0.4] [RATES="40 70 180"] [STIFFNESS="0.5 1 4"] [STEPS="1 2 4 8"] [PARALLEL=2]
+# marked BAD. A step level cN instead scales the coupling step: N of the fluid's stable steps (at
+# CFL 0.2) per synchronisation interval (fsei.fluid_steps_per_interval, 1..8; the intervals' cap
+# fsei.sync_step_ms raised N-fold from 0.1 ms with it, as the fluid's 0.1 ms), so the shells and
+# the loads see the fluid N times less often (the multirate coupling's added-mass limit). The
+# stiffness factor scales each tissue's Fung c from its value at the defaults (the table's, the
+# aorta's 4312 Pa from the calibrated layer) unless C_LV, C_LA, C_LEAFLETS or C_AORTA (Pa) give
+# another base. EXTRA adds path=value settings to every run; RATES, STIFFNESS
+# and STEPS choose the levels of the full factorial design, or DESIGN lists the runs of a reduced
+# one as heart_rate:stiffness:step triples (e.g. DESIGN="40:4:1 180:0.5:1"), longest first.
+#   [END_PHASE=0.4] [RATES="40 70 180"] [STIFFNESS="0.5 1 4"] [STEPS="1 2 4 8"] [DESIGN=...]
+#   [PARALLEL=2] [LOGS=DIR (keep each run's N.err samples and N.out metrics)]
 #   bench/coupling/fsei_stress.sh [build/bin/fsei_case] > table.md
 set -u
 exe=${1:-build/bin/fsei_case}
 end_phase=${END_PHASE:-0.4}
 timeout_s=${TIMEOUT_S:-14400}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+if [ -n "${LOGS:-}" ]; then  # keep each run's samples (N.err) and metrics (N.out) there
+  mkdir -p "$LOGS" && work=$(cd "$LOGS" && pwd)
+else
+  work=$(mktemp -d)
+  trap 'rm -rf "$work"' EXIT
+fi
 run_one() {
   local hr=$1 k=$2 m=$3 id=$4
-  local cfl end_ms
-  cfl=$(awk -v m="$m" 'BEGIN { printf "%g", 0.2 * m }')
+  local cfl end_ms step_args step_label
   end_ms=$(awk -v p="$end_phase" -v hr="$hr" 'BEGIN { printf "%.6g", p * 60000 / hr }')
-  local args=(fsi "fsei.end_time_ms=$end_ms" "heart_rate_bpm=$hr" "fluid.cfl=$cfl")
+  if [[ $m == c* ]]; then  # the coupling step: cN = N fluid steps (each at CFL 0.2) per interval
+    cfl=0.2
+    step_args=("fluid.cfl=$cfl" "fsei.fluid_steps_per_interval=${m#c}"
+      "fsei.sync_step_ms=$(awk -v n="${m#c}" 'BEGIN { printf "%g", 0.1 * n }')")
+    step_label="coupling x${m#c} (${m#c} fluid steps per interval, CFL 0.2)"
+  else
+    cfl=$(awk -v m="$m" 'BEGIN { printf "%g", 0.2 * m }')
+    step_args=("fluid.cfl=$cfl")
+    step_label="x$m (CFL $cfl)"
+  fi
+  local args=(fsi "fsei.end_time_ms=$end_ms" "heart_rate_bpm=$hr" "${step_args[@]}")
   # shellcheck disable=SC2206
   args+=(${EXTRA:-})
   for t in lv la mitral_leaflets aortic_leaflets aorta; do
@@ -40,7 +59,7 @@ run_one() {
   local verdict
   if [ $rc -eq 0 ]; then
     if grep -qiE "= (-?nan|-?inf)" "$work/$id.out"; then verdict="BAD: completed with a non-finite metric"; else
-      verdict="completed: LV peak $(awk '/^lv_pressure_max_mmhg/ {print $3}' "$work/$id.out") mmHg, aortic forward $(awk '/^aortic_forward_volume_ml/ {print $3}' "$work/$id.out") ml, $(awk '/^coupling_passes / {print $3}' "$work/$id.out") passes"; fi
+      verdict="completed: LV peak $(awk '/^lv_pressure_max_mmhg/ {print $3}' "$work/$id.out") mmHg, LV volume down to $(awk '/^lv_volume_min_ml/ {print $3}' "$work/$id.out") ml, aortic peak flow $(awk '/^aortic_flow_max_ml_s/ {print $3}' "$work/$id.out") ml/s, $(awk '/^coupling_passes / {print $3}' "$work/$id.out") passes"; fi
   elif [ $rc -eq 124 ]; then
     verdict="BAD: no answer within ${timeout_s} s"
   elif grep -q "unstable run in module" "$work/$id.err"; then
@@ -55,13 +74,20 @@ run_one() {
   verdict=${verdict//|/\\|}  # a markdown table cell
   local last
   last=$(grep "^fsi t_ms" "$work/$id.err" | tail -n 1 | awk '{print $3}')
-  printf '| %s | x%s | x%s (CFL %s) | %s of %s | %s | %s s |\n' "$hr" "$k" "$m" "$cfl" "${last:-0}" "$end_ms" "$verdict" "$wall"
+  printf '| %s | x%s | %s | %s of %s | %s | %s s |\n' "$hr" "$k" "$step_label" "${last:-0}" "$end_ms" "$verdict" "$wall"
 }
 export -f run_one
 export exe end_phase timeout_s work EXTRA C_LV C_LA C_LEAFLETS C_AORTA
 echo "| heart rate (bpm) | stiffness | step | last sample (ms) | outcome | wall |"
 echo "|---|---|---|---|---|---|"
-id=0
-for hr in ${RATES:-40 70 180}; do for k in ${STIFFNESS:-0.5 1 4}; do for m in ${STEPS:-1 2 4 8}; do
-  id=$((id + 1)); echo "$hr $k $m $id"
-done; done; done | xargs -P "${PARALLEL:-2}" -L 1 bash -c 'run_one "$@"' _ | sort -t'|' -k2,2n -k3,3 -k4,4
+design() {  # one "heart_rate stiffness step id" line per run
+  local id=0
+  if [ -n "${DESIGN:-}" ]; then
+    for t in $DESIGN; do id=$((id + 1)); echo "${t//:/ } $id"; done
+  else
+    for hr in ${RATES:-40 70 180}; do for k in ${STIFFNESS:-0.5 1 4}; do for m in ${STEPS:-1 2 4 8}; do
+      id=$((id + 1)); echo "$hr $k $m $id"
+    done; done; done
+  fi
+}
+design | xargs -P "${PARALLEL:-2}" -L 1 bash -c 'run_one "$@"' _ | sort -t'|' -k2,2n -k3,3 -k4,4
