@@ -236,6 +236,8 @@ struct Fsei {
                                         // measures strong coupling's first pass (SchedulerOptions::first_pass_residual) (ours)
   std::string first_pass_predictor;     // "last" | "linear": SchedulerOptions::first_pass_predictor (ours)
   std::string defaults;                 // "calibrated" | "seed": which defaults fsi/fsei take (parse_scenario; ours)
+  double abort_mean_speed_m_s;          // the slow-runaway guard: the box's kinetic energy over the LV's and LA's
+                                        // blood as a mean speed above this stops the run (ours)
 };
 
 struct Scenario {

@@ -1020,6 +1020,11 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   const double mitral_disk_mm = std::min(5.0, 0.5 * heart.plane.mitral_radius_mm);
   const double aortic_disk_mm = std::min(5.0, 0.5 * heart.plane.aortic_radius_mm);
   const geometry::TriMesh& lv_reference = heart.body(geometry::kLvBody);
+  // the box's kinetic energy (latest sample) as a mean speed of the LV's and LA's blood, m/s
+  auto mean_speed_m_s = [&] {
+    const double blood_m3 = 1e-6 * (v_lv.back() + v_la.back());
+    return blood_m3 > 0 ? std::sqrt(2e-3 * ke.back() / (s.fluid.density_kg_per_m3 * blood_m3)) : 0.0;
+  };
   auto sample = [&] {
     const auto p = probe_pressures(fluid, probes, fs.probe_radius_mm);
     t_ms.push_back(fluid_module.time_ms());
@@ -1084,6 +1089,18 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
+    // The slow-runaway guard (ours): energy let in by the coupling over tens of ms raises the
+    // blood's kinetic energy far above the beat's without a 10-fold jump in one fluid step or a
+    // collapse of the step (the fluid's own guards). Bounded here as a mean speed of the LV's and
+    // LA's blood carrying the whole box's kinetic energy (an upper bound on their own mean).
+    if (mean_speed_m_s() > fs.abort_mean_speed_m_s) {
+      std::ostringstream place, what;
+      place << "the blood of the LV and LA (" << v_lv.back() + v_la.back() << " ml), fastest cell " << fluid.fastest_cell();
+      what << "kinetic energy " << ke.back() << " mJ in the box is a mean speed of " << mean_speed_m_s()
+           << " m/s over the chambers' blood > fsei.abort_mean_speed_m_s = " << fs.abort_mean_speed_m_s
+           << " (a slow runaway, docs/fsei.md)";
+      throw InstabilityError("fluid", place.str(), 1e-3 * t_ms.back(), what.str());
+    }
     std::vector<double> wss_nodes;
     wss_nodes.reserve(shell_nodes_total);
     for (const std::vector<double>& v : node_wss_pa(w)) wss_nodes.insert(wss_nodes.end(), v.begin(), v.end());
@@ -1287,7 +1304,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       m.precision(7);
       m << s.scene << " t_ms " << t << " p_lv_mmhg " << p_lv.back() << " p_la_mmhg " << p_la.back() << " p_ao_mmhg "
         << p_ao.back() << " v_lv_ml " << v_lv.back() << " v_la_ml " << v_la.back() << " q_ao_ml_s " << q_ao.back()
-        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back();
+        << " q_mi_ml_s " << q_mi.back() << " ke_mj " << ke.back() << " mean_speed_m_s " << mean_speed_m_s();
       if (wall_slip_series)
         m << " lv_slip_ml_s " << lv_wall_slip.back() << " aorta_slip_ml_s " << aorta_wall_slip.back() << " plane_slip_ml_s "
           << plane_slip.back();

@@ -727,6 +727,48 @@ TEST(FseiScene, AnUnstableStopLeavesTheBodiesFrame) {
   std::filesystem::remove_all(dir);
 }
 
+// The slow-runaway guard (fsei.abort_mean_speed_m_s, ours): the box's kinetic energy as a mean
+// speed of the LV's and LA's blood, sqrt(2E / (rho V)), checked at every sample. A limit between
+// the speeds of the last sample and of every earlier one stops the run at the last sample's time
+// with the diagnosis; a limit above them all lets the same run complete.
+TEST(FseiScene, TheSlowRunawayGuardStopsAtTheFirstSampleAboveItsSpeed) {
+  auto doc = [](double limit_m_s) {
+    return nlohmann::json{{"fsei", {{"end_time_ms", 0.3}, {"abort_mean_speed_m_s", limit_m_s}}},
+                          {"outputs", {{"time_series_interval_ms", 0.1}}}};
+  };
+  Quiet quiet;
+  const config::Scenario free_run = scenario("fsi", doc(20));
+  const RunResult r = run_fsei(free_run, quiet);
+  auto values = [&](const std::string& name) {
+    for (const Series& x : r.series)
+      if (x.name == name) return x.values;
+    ADD_FAILURE() << "no series " << name;
+    return std::vector<double>{};
+  };
+  const std::vector<double> ke = values("kinetic_energy_mj"), lv = values("lv_volume_ml"), la = values("la_volume_ml");
+  ASSERT_EQ(ke.size(), 4u);  // 0, 0.1, 0.2, 0.3 ms
+  std::vector<double> speed;
+  for (std::size_t i = 0; i < ke.size(); ++i)
+    speed.push_back(std::sqrt(2e-3 * ke[i] / (free_run.fluid.density_kg_per_m3 * 1e-6 * (lv[i] + la[i]))));
+  const double earlier = *std::max_element(speed.begin(), speed.end() - 1);
+  ASSERT_GT(speed.back(), earlier) << "the blood speeds up from rest over the first 0.3 ms";
+  ASSERT_GT(earlier, 0);
+  try {
+    run_fsei(scenario("fsi", doc(0.5 * (earlier + speed.back()))), quiet);
+    FAIL() << "expected InstabilityError";
+  } catch (const InstabilityError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(e.module(), "fluid") << m;
+    EXPECT_NEAR(e.time_s(), 0.3e-3, 1e-9) << m;
+    EXPECT_NE(m.find("fsei.abort_mean_speed_m_s"), std::string::npos) << m;
+    EXPECT_NE(m.find("fastest cell (i,j,k)"), std::string::npos) << m;
+  }
+  EXPECT_NO_THROW(run_fsei(scenario("fsi", doc(1.01 * speed.back())), quiet));
+  // out of range at input, naming the field
+  EXPECT_NE(parse_error_of("fsi", {{"fsei", {{"abort_mean_speed_m_s", 0}}}}).find("fsei.abort_mean_speed_m_s"),
+            std::string::npos);
+}
+
 // A checkpoint is taken up only by the same scenario (the run's length may differ) and only
 // before the run's end; anything else is refused with what differs (docs/fsei.md).
 TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
@@ -763,11 +805,12 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   EXPECT_NEAR(longer.metrics.at("simulated_time_ms"), 0.3, 1e-9);
   EXPECT_EQ(longer.series.front().values.size(), 4u);  // 0, 0.1 (from the checkpoint), 0.2, 0.3 ms
   // resumed (at 0.2 ms) with field frames the earlier attempts did not write, a looser strain
-  // limit and a smaller CFL (none is part of the fingerprint: a run stopped by a guard resumes
-  // with another): the frames start after the checkpoint, 0.25 … 0.4 ms
+  // limit, another slow-runaway speed and a smaller CFL (none is part of the fingerprint: a run
+  // stopped by a guard resumes with another): the frames start after the checkpoint, 0.25 … 0.4 ms
   const auto out = fresh_directory("checkpoint_fields");
   {
-    nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.4}, {"checkpoint_interval_ms", 0.1}, {"field_interval_ms", 0.05}}},
+    nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.4}, {"checkpoint_interval_ms", 0.1}, {"field_interval_ms", 0.05},
+                                    {"abort_mean_speed_m_s", 5}}},
                           {"structure", {{"strain_limit", 0.75}}},
                           {"fluid", {{"cfl", 0.15}, {"cfl_rule", "per_cell"}}},
                           {"outputs", {{"time_series_interval_ms", 0.1}}}};
