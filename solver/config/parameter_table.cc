@@ -626,14 +626,20 @@ std::vector<Param> build_table() {
                              "fsei.sync_step_ms, so the fluid takes one step per interval and coupling pass instead "
                              "of filling a fixed interval with one or two (docs/benchmarks.md: with strong coupling "
                              "the passes repeat the fluid's steps)."));
-  t.push_back(SYSTOLE_POSITIVE_REAL(fsei.abort_mean_speed_m_s, "m/s", 2, 0, 20,
+  t.push_back(SYSTOLE_POSITIVE_REAL(fsei.abort_mean_speed_m_s, "m/s", 1, 0, 20,
                                     "Scenes 'fsei'/'fsi': the guard for a slow runaway (ours): at every sample the "
                                     "fluid box's kinetic energy E is spread over the blood of the LV and the LA (their "
-                                    "volumes V), and a mean speed sqrt(2E / (rho V)) above this stops the run with the "
-                                    "fastest cell and the time. The beat at the defaults peaks at about 1.3 m/s; a run "
-                                    "whose energy rises over tens of ms (docs/fsei.md, session 27) trips it, where the "
-                                    "fluid's per-step guards do not. A guard, not a parameter of the trajectory: a "
-                                    "checkpoint resumes with another value."));
+                                    "volumes V) as a mean speed sqrt(2E / (rho V)); above this speed and above "
+                                    "fsei.abort_mean_speed_orifice_ratio x the largest mean velocity through a valve's "
+                                    "orifice so far (flow / orifice area) the run stops with the fastest cell and the "
+                                    "time. Energy let in by the coupling over tens of ms trips it where the fluid's "
+                                    "per-step guards do not (docs/fsei.md, sessions 27-28). A guard, not a parameter of "
+                                    "the trajectory: a checkpoint resumes with another value."));
+  t.push_back(SYSTOLE_POSITIVE_REAL(fsei.abort_mean_speed_orifice_ratio, "", 1, 0, 100,
+                                    "Scenes 'fsei'/'fsi': the slow-runaway guard's second bound (ours; see "
+                                    "fsei.abort_mean_speed_m_s): the chambers' mean speed over the largest mean velocity "
+                                    "through a valve's orifice so far. Whole beats stay below 0.8 (docs/fsei.md, "
+                                    "session 28)."));
   t.push_back(SYSTOLE_INT(fsei.fluid_steps_per_interval, "", 1, 1, 8,
                           "Scenes 'fsei'/'fsi' with fsei.sync_interval = fluid_step: each interval is this many "
                           "of the fluid's stable steps at its start (still at most fsei.sync_step_ms; ours): fewer "

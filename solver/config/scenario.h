@@ -237,7 +237,8 @@ struct Fsei {
   std::string first_pass_predictor;     // "last" | "linear": SchedulerOptions::first_pass_predictor (ours)
   std::string defaults;                 // "calibrated" | "seed": which defaults fsi/fsei take (parse_scenario; ours)
   double abort_mean_speed_m_s;          // the slow-runaway guard: the box's kinetic energy over the LV's and LA's
-                                        // blood as a mean speed above this stops the run (ours)
+  double abort_mean_speed_orifice_ratio;  // blood as a mean speed above both this and the ratio x the largest mean
+                                          // velocity through an orifice so far stops the run (ours)
 };
 
 struct Scenario {

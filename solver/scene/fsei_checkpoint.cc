@@ -28,7 +28,7 @@ std::string exact(double v) {
 }
 
 // What a continued run may change (none of it is the model): the outputs, the run's length, the
-// field and checkpoint intervals, the slow-runaway guard's speed, the structure's strain limit (a guard that stops the run, not a parameter of the
+// field and checkpoint intervals, the slow-runaway guard's bounds, the structure's strain limit (a guard that stops the run, not a parameter of the
 // trajectory: the pre-stress does not depend on it either, prestress.h), so a run stopped by it
 // resumes from its last checkpoint with a looser one, the slabs' split over the ranks (like
 // the rank count: the trajectory to round-off), and the fluid's CFL target and rule (ours: the
@@ -39,7 +39,8 @@ bool excluded(std::string_view path) {
   return path.rfind("outputs.", 0) == 0 || path == "beats" || path == "fsei.end_time_ms" ||
          path == "fsei.field_interval_ms" || path == "fsei.checkpoint_interval_ms" ||
          path == "structure.strain_limit" || path == "fsei.slab_split" || path == "fluid.cfl" ||
-         path == "fluid.cfl_rule" || path == "fsei.abort_mean_speed_m_s";
+         path == "fluid.cfl_rule" || path == "fsei.abort_mean_speed_m_s" ||
+         path == "fsei.abort_mean_speed_orifice_ratio";
 }
 
 std::string entry_name(std::size_t k) { return std::string("e").append(std::to_string(k)); }
