@@ -1097,7 +1097,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     // collapse of the step (the fluid's own guards). The box's kinetic energy as a mean speed of
     // the LV's and LA's blood is set against the streams that carry it: the largest mean velocity
     // through a valve's orifice so far (flow / the orifice's area; ml/s per mm² = m/s). In a beat
-    // the first stays below the second (docs/fsei.md, session 28: 0.76 of it at most at 180 bpm);
+    // the first stays below the second (docs/fsei.md, session 28: at most 0.80 of it through the
+    // ejection at 180 bpm, 0.69 at 70 bpm);
     // above fsei.abort_mean_speed_m_s and more than fsei.abort_mean_speed_orifice_ratio times the
     // orifices' the run stops. Computed from the series, so a resumed run guards as a straight one.
     {
