@@ -35,12 +35,12 @@ def read_series(result_dir):
 
 
 def read_time_log(path):
-    wall_s, rss_gb, cpu_s = float("nan"), float("nan"), 0.0
+    wall_s, rss_gb, cpu = float("nan"), float("nan"), {}
     with open(path) as f:
         for line in f:
             m = re.search(r"(User|System) time \(seconds\): (\S+)", line)
             if m:
-                cpu_s += float(m.group(2))
+                cpu[m.group(1)] = float(m.group(2))
             m = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", line)
             if m:
                 parts = [float(p) for p in m.group(1).split(":")]
@@ -50,7 +50,9 @@ def read_time_log(path):
                 rss_gb = int(m.group(1)) / 1024 ** 2
     if math.isnan(wall_s):
         sys.exit(f"{path}: no '/usr/bin/time -v' wall-clock line (was the run timed, and did it finish?)")
-    return wall_s, rss_gb, cpu_s
+    if len(cpu) != 2:
+        sys.exit(f"{path}: no '/usr/bin/time -v' User and System time lines (one run per log: not appended with -a)")
+    return wall_s, rss_gb, cpu["User"] + cpu["System"]
 
 
 def integrate(t_s, y, t0, t1):
