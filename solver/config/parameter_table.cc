@@ -641,7 +641,7 @@ std::vector<Param> build_table() {
                                     "through a valve's orifice so far. Runs through the ejection at 70 and 180 bpm stayed "
                                     "at 0.69-0.80 of it to 0.4 T, runaways crossed 1 (docs/fsei.md, session 28); a "
                                     "whole 180-bpm beat at the defaults crosses it at 0.48 T, its energy rising while "
-                                    "the flow falls (runaway or too tight a bound: open, session 29)."));
+                                    "the flow falls, a real runaway (relaxed to 3 it gained energy to 655 mJ by 189 ms; session 29)."));
   t.push_back(SYSTOLE_INT(fsei.fluid_steps_per_interval, "", 1, 1, 8,
                           "Scenes 'fsei'/'fsi' with fsei.sync_interval = fluid_step: each interval is this many "
                           "of the fluid's stable steps at its start (still at most fsei.sync_step_ms; ours): fewer "
