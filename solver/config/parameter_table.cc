@@ -112,7 +112,8 @@ std::vector<Param> build_table() {
                            "Poisson ratio nu_m in the bending stiffness (eq 19)."));
   t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 340, 0, 1000,
                            "Nash-Panfilov active tension amplitude k_tau (Nash & Panfilov 2004: "
-                           "47.9 kPa); 340 calibrated by the electromechanics scene (docs/electromechanics.md)."));
+                           "47.9 kPa); 340 calibrated by the electromechanics scene against its 0-D afterload "
+                           "(docs/electromechanics.md); scene fsei in blood: 250 (docs/fsei.md session 31)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(tissue.active_tension_time_scale_ms, "ms", 20, 0, 1000,
                                     "Nash-Panfilov time unit t_scale (eq 23): the tension rises with time constant "
                                     "10 t_scale and relaxes with t_scale (Nash & Panfilov 2004: 12.9 ms; 20 ms "
@@ -782,6 +783,9 @@ const std::vector<SceneDefault>& fsei_calibrated_defaults() {
       // the prescribed activation of scene fsi (sessions 21-23)
       {"fsei.prescribed_peak_tension_kpa", "120"},
       {"fsei.prescribed_la_tension_fraction", "0.4"},
+      // the EP-driven tension of scene fsei in blood (session 31): the electromechanics scene's
+      // 340 kPa, calibrated against its 0-D afterload, drove the LV to 170 mmHg by 0.16 T
+      {"tissue.active_tension_k_kpa", "250", "fsei"},
   };
   return layer;
 }
@@ -854,7 +858,8 @@ std::string parameters_markdown() {
       case Kind::kRealList:
       case Kind::kChoiceList: def = "[]"; break;
     }
-    if (const SceneDefault* d = find_fsei_calibrated_default(p.path)) def += " (fsi/fsei: " + std::string(d->value) + ")";
+    if (const SceneDefault* d = find_fsei_calibrated_default(p.path))
+      def += " (" + (d->scene.empty() ? std::string("fsi/fsei") : std::string(d->scene)) + ": " + std::string(d->value) + ")";
     out << "| `" << p.path << "` | " << (p.unit.empty() ? "-" : std::string(p.unit)) << " | " << def
         << " | " << describe_allowed(p) << " | " << p.doc << " |\n";
   }

@@ -50,10 +50,13 @@ std::string describe_allowed(const Param& param);
 struct SceneDefault {
   std::string_view path;
   std::string_view value;
+  std::string_view scene = {};  // the one scene it is for ("fsei"); empty: fsi and fsei
 };
 
 // Scenes fsi and fsei with fsei.defaults = calibrated: these replace the table's defaults before
 // the scenario's own fields are read (parse_scenario), so a field the scenario sets always wins.
+// An entry with a scene is that scene's only (a field the other scene does not use keeps the
+// table's default there, and with it the other scene's checkpoint fingerprints).
 const std::vector<SceneDefault>& fsei_calibrated_defaults();
 
 // nullptr if the layer leaves `path` at the table's default.

@@ -301,8 +301,9 @@ Scenario parse_scenario(const nlohmann::json& document) {
   std::vector<std::string> errors;
   if (takes_fsei_calibrated_defaults(document)) {
     nlohmann::json layer = nlohmann::json::object();
+    const std::string scene = document.at("scene").get<std::string>();
     for (const SceneDefault& d : fsei_calibrated_defaults())
-      apply_override(layer, std::string(d.path) + "=" + std::string(d.value));
+      if (d.scene.empty() || d.scene == scene) apply_override(layer, std::string(d.path) + "=" + std::string(d.value));
     walk(layer, "", s, errors);
     if (!errors.empty()) throw std::logic_error("fsei_calibrated_defaults(): " + join_errors(errors));
   }

@@ -1456,7 +1456,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   const auto& st = scheduler.stats();
   M["fluid_steps"] = static_cast<double>(st.modules[fluid_stage].steps);
   M["structure_substeps"] = static_cast<double>(st.modules[structure_stage].steps);
-  M["ep_steps"] = with_ep ? static_cast<double>(st.modules[0].steps + std::lround(s.av_delay_ms / s.electro.time_step_ms)) : 0.0;
+  // the tissue's own steps from its t = 0 (the LA stimulus: the av delay's pre-run included, and
+  // those before a checkpoint); the scheduler's calls of the EP stage are more (sub-cycles of
+  // each pass, replays after a restore)
+  M["ep_steps"] = with_ep ? static_cast<double>(std::lround(tissue->time_ms() / s.electro.time_step_ms)) : 0.0;
   M["coupling_intervals"] = static_cast<double>(st.intervals);
   // strong coupling: passes in all (= intervals when loose), intervals that ended at the pass
   // limit, and the largest relative change of the transferred data at an interval's end

@@ -24,6 +24,7 @@
 #include "solver/scene/fsei_fields.h"
 #include "solver/scene/fsei_scene.h"
 #include "solver/structure/shapes.h"
+#include "tests/coupling/fsei_isovolumic.h"
 
 namespace systole::scene {
 namespace {
@@ -440,42 +441,11 @@ TEST(FseiScene, TheFirstTenthOfABeatAtTheDefaultsContractsBehindClosedValves) {
   ASSERT_EQ(s.fsei.defaults, "calibrated");
   ASSERT_EQ(fsei_grid_points(s).nz, 93);
   Quiet control;
-  const RunResult r = run_fsei(s, control);
-  auto series = [&](const std::string& name) -> const std::vector<double>& {
-    for (const auto& x : r.series)
-      if (x.name == name) return x.values;
-    ADD_FAILURE() << "no series " << name;
-    return r.series.front().values;
-  };
-  const auto& t = series("time_s");
-  const auto& p_lv = series("lv_pressure_mmhg");
-  const auto& p_la = series("la_pressure_mmhg");
-  const auto& p_ao = series("aortic_root_pressure_mmhg");
-  const auto& v_lv = series("lv_volume_ml");
-  const auto& q_ao = series("aortic_flow_ml_s");
-  const auto& q_mi = series("mitral_flow_ml_s");
-  ASSERT_EQ(t.size(), 86u);
-  for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
-  EXPECT_EQ(r.metrics.at("coupling_unconverged_intervals"), 0.0);
-  auto at = [&](double ms) { return static_cast<std::size_t>(std::lround(ms)); };  // 1-ms samples from 0
-  double through_ao = 0, through_mi = 0, p_mean = 0;
-  for (std::size_t i = at(20); i < at(85); ++i) {
-    through_ao += 0.5e-3 * (q_ao[i] + q_ao[i + 1]);
-    through_mi += 0.5e-3 * (q_mi[i] + q_mi[i + 1]);
-    p_mean += 0.5 * (p_lv[i] + p_lv[i + 1]) / 65;
-  }
-  const double leak_ml = (through_mi - through_ao) - (v_lv[at(85)] - v_lv[at(20)]);
-  std::printf("  [measured] 20-85 ms: aortic %.3f ml, mitral %.3f ml; LV %.2f -> %.2f mmHg, %.3f -> %.3f ml; "
-              "root %.1f mmHg; LV leak %.3f ml at %.2f mmHg mean: %.3f ml/s per mmHg\n",
-              through_ao, through_mi, p_lv[at(20)], p_lv[at(85)], v_lv[at(20)], v_lv[at(85)], p_ao[at(85)], leak_ml, p_mean,
-              leak_ml / 0.065 / p_mean);
-  for (std::size_t i = at(20); i < t.size(); ++i) EXPECT_GT(p_ao[i], p_lv[i]) << "aortic valve, " << t[i] << " s";
-  for (std::size_t i = at(25); i < t.size(); ++i) EXPECT_GT(p_lv[i], p_la[i]) << "mitral valve, " << t[i] << " s";
-  EXPECT_LT(std::abs(through_ao), 0.5);
-  EXPECT_LT(std::abs(through_mi), 1.5);
-  for (std::size_t i = at(25); i < t.size(); ++i) EXPECT_GT(p_lv[i], p_lv[i - 5]) << t[i];
-  EXPECT_GT(p_lv[at(85)], 40.0);
-  EXPECT_LT(std::abs(leak_ml) / 0.065 / p_mean, 0.5);
+  const IsovolumicWindow w = check_isovolumic_contraction(run_fsei(s, control), 20, 85);
+  EXPECT_LT(std::abs(w.through_aortic_ml), 0.5);
+  EXPECT_LT(std::abs(w.through_mitral_ml), 1.5);
+  EXPECT_GT(w.lv_end_mmhg, 40.0);
+  EXPECT_LT(std::abs(w.leak_ml_s_per_mmhg), 0.5);
 }
 
 // The divergence-free kernel in the heart (fsei.forcing_kernel, ours; docs/fsei.md session 14):
