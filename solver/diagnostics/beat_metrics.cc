@@ -37,6 +37,18 @@ double peak_abs(std::span<const double> v) {
   return m;
 }
 
+// The topographic prominence of the local maximum q[i] within q[first..]: its height above the
+// higher of the two lowest points between it and the nearest higher sample on either side (or the
+// range's ends). A ripple on the rise of a wave has a small prominence; the wave's crest a large
+// one (ours: P3's 39-ml/s ripple on its E wave's rise, docs/fsei.md session 31).
+double prominence(std::span<const double> q, size_t first, size_t i) {
+  double left_min = q[i];
+  for (size_t j = i; j-- > first && q[j] <= q[i];) left_min = std::min(left_min, q[j]);
+  double right_min = q[i];
+  for (size_t j = i + 1; j < q.size() && q[j] <= q[i]; ++j) right_min = std::min(right_min, q[j]);
+  return q[i] - std::max(left_min, right_min);
+}
+
 }  // namespace
 
 double stroke_volume_ml(double edv_ml, double esv_ml) { return edv_ml - esv_ml; }
@@ -188,10 +200,13 @@ BeatMetrics compute_beat_metrics(const BeatSamples& b) {
     const double t_open = b.beat_start_s + *m.mitral_valve.open_phase * b.period_s;
     const auto& q = b.mitral_flow_ml_s;
     const double floor = 0.1 * m.mitral_peak_flow_ml_s;
+    size_t i_open = 0;
+    while (i_open < q.size() && b.time_s[i_open] < t_open) ++i_open;
     std::vector<size_t> peaks;
-    for (size_t i = 1; i + 1 < q.size(); ++i) {
-      if (b.time_s[i] < t_open) continue;
-      if (q[i] > floor && q[i] >= q[i - 1] && q[i] > q[i + 1]) peaks.push_back(i);
+    for (size_t i = std::max<size_t>(i_open, 1); i + 1 < q.size(); ++i) {
+      if (q[i] > floor && q[i] >= q[i - 1] && q[i] > q[i + 1] &&
+          prominence(q, i_open, i) >= floor)
+        peaks.push_back(i);
     }
     if (!peaks.empty()) {
       m.mitral_e_peak_phase = phase(b.time_s[peaks.front()]);

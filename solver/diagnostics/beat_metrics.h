@@ -74,8 +74,9 @@ struct BeatMetrics {
   ValveEvents aortic_valve;
   ValveEvents mitral_valve;
   // Early (E) and atrial (A) filling waves: the first local maximum of the mitral flow after its
-  // opening that exceeds 10 % of the beat's peak mitral flow, and the largest such maximum after
-  // it; A is empty when there is only one such maximum.
+  // opening that exceeds 10 % of the beat's peak mitral flow and stands out by as much (its
+  // topographic prominence, so ripples on a wave's flank are not waves), and the largest such
+  // maximum after it; A is empty when there is only one such maximum.
   std::optional<double> mitral_e_peak_phase, mitral_e_peak_flow_ml_s;
   std::optional<double> mitral_a_peak_phase, mitral_a_peak_flow_ml_s;
 };

@@ -118,6 +118,30 @@ TEST(BeatMetrics, SyntheticBeatGivesTheConstructedAnswers) {
   EXPECT_EQ(map.count("aortic_valve_close_phase"), 1u);
 }
 
+// A 30-ml/s dip on the E wave's rise (a 3-D flow's ripple, as in run P3 of docs/fsei.md) makes a
+// local maximum of 166.7 ml/s at 0.36 s, above the 10 % floor (50 ml/s) but standing out by only
+// 30 ml/s: the E wave is still the crest at 0.40 s, and A is unchanged.
+TEST(BeatMetrics, ARippleOnTheEWavesRiseIsNotTheEWave) {
+  SyntheticBeat b;
+  const size_t crest = 360;  // t = 0.360 s: 500 * 0.02 / 0.06
+  ASSERT_NEAR(b.qm[crest], 500.0 / 3, 1e-9);
+  for (size_t i = crest + 1; i < crest + 5; ++i) b.qm[i] = b.qm[crest] - 30;
+  ASSERT_GT(b.qm[crest + 5], b.qm[crest]);
+  const BeatMetrics m = compute_beat_metrics(b.samples());
+  ASSERT_TRUE(m.mitral_e_peak_phase && m.mitral_a_peak_phase);
+  EXPECT_NEAR(*m.mitral_e_peak_phase, 0.40 / 0.8, 1e-9);
+  EXPECT_NEAR(*m.mitral_e_peak_flow_ml_s, 500, 1e-6);
+  EXPECT_NEAR(*m.mitral_a_peak_phase, 0.72 / 0.8, 1e-9);
+  EXPECT_NEAR(*m.mitral_a_peak_flow_ml_s, 250, 1e-6);
+  // A dip as deep as the floor makes the ripple a wave of its own: it is then E, and the
+  // largest later crest (500 ml/s) is reported as A.
+  for (size_t i = crest + 1; i < crest + 5; ++i) b.qm[i] = b.qm[crest] - 60;
+  const BeatMetrics two = compute_beat_metrics(b.samples());
+  ASSERT_TRUE(two.mitral_e_peak_flow_ml_s && two.mitral_a_peak_flow_ml_s);
+  EXPECT_NEAR(*two.mitral_e_peak_flow_ml_s, 500.0 / 3, 1e-9);
+  EXPECT_NEAR(*two.mitral_a_peak_flow_ml_s, 500, 1e-6);
+}
+
 TEST(BeatMetrics, MissingEventsAreLeftOutNotNaN) {
   std::vector<double> t{0, 0.5, 1}, v{100, 100, 100}, p{5, 5, 5}, q{0, 0, 0};
   const BeatMetrics m = compute_beat_metrics({t, v, p, p, q, q, 0, 1});
