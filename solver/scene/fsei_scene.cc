@@ -369,6 +369,10 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
           best = x;
       m[p.metric] = best;
     }
+    // The seed's twist is read at end-systole (MODEL.md §8: ≈ 17°): the twist at the aortic closure, where the beat
+    // has one; the peak above is over the whole beat.
+    if (const auto close = m.find("aortic_valve_close_phase"); close != m.end())
+      m["lv_twist_end_systole_deg"] = diagnostics::value_at(bs.time_s, window("lv_twist_deg"), start + close->second * period_s);
     m["beat"] = b;
     m["beat_start_s"] = start;
     for (const auto& [key, value] : m)
