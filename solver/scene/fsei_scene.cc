@@ -373,6 +373,19 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     // has one; the peak above is over the whole beat.
     if (const auto close = m.find("aortic_valve_close_phase"); close != m.end())
       m["lv_twist_end_systole_deg"] = diagnostics::value_at(bs.time_s, window("lv_twist_deg"), start + close->second * period_s);
+    // The aortic flow's reversal after its peak (ours): where the valve's threshold reading above (5 % of the peak
+    // flow, held for 2 % of the period) takes a slow tail of the ejection for the closure, the reversal is the
+    // ejection's end (docs/fsei.md session 32: 0.347-0.348 T on three grids where the threshold read 0.308-0.341 T).
+    {
+      const std::span<const double> q = bs.aortic_flow_ml_s;
+      const std::size_t i_peak = std::max_element(q.begin(), q.end()) - q.begin();
+      for (std::size_t i = i_peak; i + 1 < n; ++i)
+        if (q[i] > 0 && q[i + 1] <= 0) {
+          const double t_rev = bs.time_s[i] + (bs.time_s[i + 1] - bs.time_s[i]) * q[i] / (q[i] - q[i + 1]);
+          m["aortic_flow_reversal_phase"] = (t_rev - start) / period_s;
+          break;
+        }
+    }
     m["beat"] = b;
     m["beat_start_s"] = start;
     for (const auto& [key, value] : m)

@@ -242,6 +242,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
     EXPECT_NEAR(m.at("lv_twist_peak_deg"), -10, 1e-3);  // signed, largest magnitude
     // at the aortic closure (the seed's end-systole); the curve's slope 10π/800 deg/ms at most, the closure's 2e-3 T
     EXPECT_NEAR(m.at("lv_twist_end_systole_deg"), -10 * std::sin(pi * ao_close_ms / T), 0.1);
+    EXPECT_NEAR(m.at("aortic_flow_reversal_phase"), 300 / T, 1e-9);  // the sine ends at 0 at 300 ms
     EXPECT_EQ(m.at("lv_longitudinal_strain_min"), -0.15);
     EXPECT_EQ(m.at("la_volume_max_ml"), 40);
   }
