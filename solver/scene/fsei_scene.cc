@@ -379,12 +379,9 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     {
       const std::span<const double> q = bs.aortic_flow_ml_s;
       const std::size_t i_peak = std::max_element(q.begin(), q.end()) - q.begin();
-      for (std::size_t i = i_peak; i + 1 < n; ++i)
-        if (q[i] > 0 && q[i + 1] <= 0) {
-          const double t_rev = bs.time_s[i] + (bs.time_s[i + 1] - bs.time_s[i]) * q[i] / (q[i] - q[i + 1]);
-          m["aortic_flow_reversal_phase"] = (t_rev - start) / period_s;
-          break;
-        }
+      if (const auto t_rev = diagnostics::first_crossing(bs.time_s.subspan(i_peak), q.subspan(i_peak), 0.0,
+                                                         diagnostics::Crossing::kDownward))
+        m["aortic_flow_reversal_phase"] = (*t_rev - start) / period_s;
     }
     m["beat"] = b;
     m["beat_start_s"] = start;
