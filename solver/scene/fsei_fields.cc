@@ -23,6 +23,8 @@ std::string fluid_file(int k) { return "fsei_fluid_" + std::to_string(k) + ".h5"
 
 bool has_tension(const std::string& name) { return name == geometry::kLvBody || name == geometry::kLaBody; }
 
+constexpr int kGzip = 4;  // the bodies' per-node arrays: shuffle + gzip level 4, as the fluid frames (ours)
+
 std::vector<double> flat(const std::vector<geometry::Vec3>& v) {
   std::vector<double> out;
   out.reserve(3 * v.size());
@@ -57,6 +59,7 @@ std::string xdmf_triangles(std::size_t nt, const std::string& file, const std::s
 FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
                                  const geometry::TriMesh& plane, const structure::BodyGroup& group,
                                  std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units,
+                                 std::function<std::vector<double>(std::size_t)> node_vm_mv,
                                  const std::vector<double>* resumed_times_ms)
     : dir_(std::move(dir)),
       nx_(grid.nx()),
@@ -71,6 +74,7 @@ FseiFieldWriter::FseiFieldWriter(std::filesystem::path dir, const grid::Grid& gr
       plane_(plane),
       group_(group),
       units_(fluid_units),
+      node_vm_mv_(std::move(node_vm_mv)),
       rank0_(is_rank_zero()) {
   if (names_.size() != group.body_count())
     throw std::invalid_argument("FseiFieldWriter: " + std::to_string(names_.size()) + " names for " +
@@ -157,8 +161,8 @@ void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyG
     const structure::ShellModel& m = group.body(b);
     const std::string n = g + "/" + names_[b];
     const std::vector<double> x = flat(m.positions_mm()), v = flat(m.velocities_mm_per_ms());  // mm/ms = m/s
-    write_h5_dataset(file, n + "_positions_mm", H5T_NATIVE_DOUBLE, x.data(), m.node_count(), 3, "fsei fields");
-    write_h5_dataset(file, n + "_velocity_m_s", H5T_NATIVE_DOUBLE, v.data(), m.node_count(), 3, "fsei fields");
+    write_h5_dataset(file, n + "_positions_mm", H5T_NATIVE_DOUBLE, x.data(), m.node_count(), 3, "fsei fields", kGzip);
+    write_h5_dataset(file, n + "_velocity_m_s", H5T_NATIVE_DOUBLE, v.data(), m.node_count(), 3, "fsei fields", kGzip);
     std::vector<double> worst(m.node_count(), 0.0);
     const std::vector<double> eps = m.edge_strains();
     const auto& springs = m.springs();
@@ -167,13 +171,19 @@ void FseiFieldWriter::write_bodies(int k, double time_ms, const structure::BodyG
         double& w = worst[static_cast<std::size_t>(i)];
         if (!(std::abs(eps[e]) <= std::abs(w))) w = eps[e];  // a NaN strain is kept: it is the diagnosis
       }
-    write_h5_dataset(file, n + "_edge_strain", H5T_NATIVE_DOUBLE, worst.data(), m.node_count(), 1, "fsei fields");
-    if (has_tension(names_[b]))
+    write_h5_dataset(file, n + "_edge_strain", H5T_NATIVE_DOUBLE, worst.data(), m.node_count(), 1, "fsei fields", kGzip);
+    if (has_tension(names_[b])) {
       write_h5_dataset(file, n + "_active_tension_kpa", H5T_NATIVE_DOUBLE, m.active_tension_kpa().data(),
-                       m.node_count(), 1, "fsei fields");
+                       m.node_count(), 1, "fsei fields", kGzip);
+      if (node_vm_mv_) {
+        const std::vector<double> vm = node_vm_mv_(b);
+        if (vm.size() != m.node_count()) throw std::logic_error("fsei fields: vm_mv of " + names_[b] + " has the wrong size");
+        write_h5_dataset(file, n + "_vm_mv", H5T_NATIVE_DOUBLE, vm.data(), m.node_count(), 1, "fsei fields", kGzip);
+      }
+    }
     if (wss_pa) {
       if (wss_pa->at(b).size() != m.node_count()) throw std::logic_error("fsei fields: wss_pa of " + names_[b] + " has the wrong size");
-      write_h5_dataset(file, n + "_wss_pa", H5T_NATIVE_DOUBLE, wss_pa->at(b).data(), m.node_count(), 1, "fsei fields");
+      write_h5_dataset(file, n + "_wss_pa", H5T_NATIVE_DOUBLE, wss_pa->at(b).data(), m.node_count(), 1, "fsei fields", kGzip);
     }
   }
   H5Fclose(file);
@@ -260,6 +270,9 @@ void FseiFieldWriter::write_xmf() const {
         if (has_tension(names_[b]))
           x << "     <Attribute Name=\"active_tension_kpa\" AttributeType=\"Scalar\" Center=\"Node\">"
             << nodes(nodes_[b], 1, p + "_active_tension_kpa") << "</Attribute>\n";
+        if (has_tension(names_[b]) && node_vm_mv_)
+          x << "     <Attribute Name=\"vm_mv\" AttributeType=\"Scalar\" Center=\"Node\">"
+            << nodes(nodes_[b], 1, p + "_vm_mv") << "</Attribute>\n";
         if (frames_[k].fluid)
           x << "     <Attribute Name=\"wss_pa\" AttributeType=\"Scalar\" Center=\"Node\">"
             << nodes(nodes_[b], 1, p + "_wss_pa") << "</Attribute>\n";

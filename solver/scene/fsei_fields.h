@@ -9,9 +9,11 @@
 //                       /mesh/valvular_plane_positions_mm, and per frame /frames/<k>/:
 //                       time_ms, <body>_positions_mm, <body>_velocity_m_s, <body>_edge_strain
 //                       (per node, the signed strain (l - l0)/l of its most strained edge) and,
-//                       for the LV and LA, <body>_active_tension_kpa; with the fluid, the
-//                       wall shear stress <body>_wss_pa (per node, the larger of the two
-//                       sides' for leaflets; ibm::wall_shear_stress). Rank 0 writes.
+//                       for the LV and LA, <body>_active_tension_kpa and (scene fsei, with EP)
+//                       the transmembrane potential <body>_vm_mv (NaN at a node without an EP
+//                       node); with the fluid, the wall shear stress <body>_wss_pa (per node,
+//                       the larger of the two sides' for leaflets; ibm::wall_shear_stress).
+//                       The per-node arrays are stored with shuffle + gzip level 4. Rank 0 writes.
 //   fsei_fields.xmf     a temporal collection: per frame the fluid grid (when it has one), the
 //                       plane and every body. Rewritten after every frame, so a run that stops
 //                       leaves a readable file with the frames so far.
@@ -24,6 +26,7 @@
 // writes the fluid; bodies_frame() is rank 0's alone (no communication: usable after a
 // rank-local failure). Throws std::runtime_error naming the file on I/O failure.
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -52,10 +55,13 @@ class FseiFieldWriter {
   // checkpoint) are removed and the numbering continues; otherwise (another output directory)
   // a new file is started and the earlier frames are left out of the xmf
   // (earlier_frames_present() is then false). Collective (rank 0 looks, every rank learns).
-  // The plane and the group must outlive the writer.
+  // node_vm_mv (scene fsei; empty: no potential written): the transmembrane potential in mV at
+  // every node of group body b, for the bodies named as the LV and LA, called when a frame is
+  // written (on rank 0). The plane and the group must outlive the writer.
   FseiFieldWriter(std::filesystem::path dir, const grid::Grid& grid, double mm_per_unit,
                   const geometry::TriMesh& plane, const structure::BodyGroup& group,
                   std::vector<std::string> names, fluid::FluidSolver::FieldSelection fluid_units,
+                  std::function<std::vector<double>(std::size_t body)> node_vm_mv,
                   const std::vector<double>* resumed_times_ms = nullptr);
   bool earlier_frames_present() const { return earlier_present_; }
 
@@ -92,6 +98,7 @@ class FseiFieldWriter {
   const geometry::TriMesh& plane_;
   const structure::BodyGroup& group_;
   fluid::FluidSolver::FieldSelection units_;
+  std::function<std::vector<double>(std::size_t)> node_vm_mv_;
   bool rank0_;
   std::vector<Frame> frames_;
   bool earlier_present_ = true;

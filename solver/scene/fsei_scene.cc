@@ -7,8 +7,10 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <span>
@@ -294,7 +296,10 @@ const std::vector<std::string>& fsei_metric_names() {
 }
 
 std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<Series>& series, double period_ms,
-                                                             const std::string& scene) {
+                                                             double blood_density_kg_per_m3, const std::string& scene) {
+  if (!(blood_density_kg_per_m3 > 0))
+    throw std::invalid_argument("fsei_beat_metrics: blood_density_kg_per_m3 must be > 0, got " +
+                                std::to_string(blood_density_kg_per_m3));
   auto find = [&](const std::string& name) -> const std::vector<double>& {
     for (const Series& x : series)
       if (x.name == name) return x.values;
@@ -382,6 +387,40 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
       if (const auto t_rev = diagnostics::first_crossing(bs.time_s.subspan(i_peak), q.subspan(i_peak), 0.0,
                                                          diagnostics::Crossing::kDownward))
         m["aortic_flow_reversal_phase"] = (*t_rev - start) / period_s;
+    }
+    // The open mitral valve as a clinician reads it (ours, after the Gorlin and Hakki formulas with a discharge
+    // coefficient of 1): the mean transmitral gradient LA − LV and the effective orifice area
+    // A = Q̄ / sqrt(2 Δp̄ / ρ) over the valve's open interval (its opening to its closure, or to the beat's end);
+    // a healthy adult's mitral valve has 4-6 cm² and < 2 mmHg mean gradient, a severe stenosis < 1 cm²
+    // (Baumgartner et al., J Am Soc Echocardiogr 22:1-23, 2009). Left out when the valve did not open or the mean
+    // gradient is not positive.
+    if (const auto open = m.find("mitral_valve_open_phase"); open != m.end()) {
+      const double t_open = start + open->second * period_s;
+      const auto close = m.find("mitral_valve_close_phase");
+      const double t_close = close != m.end() ? start + close->second * period_s : stop;
+      const std::span<const double> la = window("la_pressure_mmhg");
+      std::vector<double> t, q, dp;  // the open interval, its ends interpolated
+      auto push = [&](double at) {
+        t.push_back(at);
+        q.push_back(diagnostics::value_at(bs.time_s, bs.mitral_flow_ml_s, at));
+        dp.push_back(diagnostics::value_at(bs.time_s, la, at) - diagnostics::value_at(bs.time_s, bs.lv_pressure_mmhg, at));
+      };
+      push(t_open);
+      for (std::size_t i = 0; i < n; ++i)
+        if (bs.time_s[i] > t_open && bs.time_s[i] < t_close) {
+          t.push_back(bs.time_s[i]);
+          q.push_back(bs.mitral_flow_ml_s[i]);
+          dp.push_back(la[i] - bs.lv_pressure_mmhg[i]);
+        }
+      push(t_close);
+      if (t_close > t_open) {
+        const double q_mean_ml_s = diagnostics::time_average(t, q), dp_mean_mmhg = diagnostics::time_average(t, dp);
+        m["mitral_mean_gradient_mmhg"] = dp_mean_mmhg;
+        if (dp_mean_mmhg > 0 && q_mean_ml_s > 0) {
+          const double speed_m_s = std::sqrt(2 * dp_mean_mmhg * units::kPaPerMmHg / blood_density_kg_per_m3);
+          m["mitral_effective_orifice_area_cm2"] = q_mean_ml_s / (100 * speed_m_s);  // ml/s / (cm/s)
+        }
+      }
     }
     m["beat"] = b;
     m["beat_start_s"] = start;
@@ -714,6 +753,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // 5. the active tension on the LV and LA walls: nodes within passive_annulus_mm of the anchor
   //    ring (the fibrous annulus) and the vein caps carry none (as in scene electromechanics)
   std::array<std::vector<std::int32_t>, 2> ep_node;  // per chamber: the EP node of each shell node, -1: none
+  // per chamber (fsei): the EP node whose potential each shell node shows, the passive annulus included; -1: none
+  std::array<std::vector<std::int32_t>, 2> ep_vm_node;
   std::unique_ptr<electro::TissueSolver> tissue;
   std::unique_ptr<coupling::ElectroModule> ep_module;
   std::unique_ptr<ShiftedClock> ep_clock;
@@ -738,6 +779,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       if (with_ep) {
         for (std::size_t k = 0; k < source.size(); ++k)
           if (source[k][0] == static_cast<int>(c)) map[static_cast<std::size_t>(source[k][1])] = static_cast<std::int32_t>(k);
+        ep_vm_node[c] = map;
       } else {
         // fsi: every wall node outside the vein caps
         for (std::size_t i = 0; i < mesh.node_count(); ++i)
@@ -1233,9 +1275,19 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     units.vorticity_scale = 1e3 * kUmMmPerMs / kDmMm;  // U/d in 1/s
     units.gzip_level = 4;                              // shuffle + gzip (ours: level 4)
     std::vector<std::string> names(deformable.begin(), deformable.end());
+    std::function<std::vector<double>(std::size_t)> node_vm_mv;  // fsei: the EP's potential at the LV's and LA's nodes
+    if (with_ep)
+      node_vm_mv = [&](std::size_t b) {
+        if (b != kLv && b != kLa) throw std::logic_error("fsei fields: body " + std::to_string(b) + " has no potential");
+        const std::vector<std::int32_t>& map = ep_vm_node[b == kLv ? 0 : 1];
+        std::vector<double> vm(map.size(), std::numeric_limits<double>::quiet_NaN());
+        for (std::size_t i = 0; i < map.size(); ++i)
+          if (map[i] >= 0) vm[i] = tissue->vm_mv()[static_cast<std::size_t>(map[i])];
+        return vm;
+      };
     fields = std::make_unique<FseiFieldWriter>(control.output_directory(), g, kDmMm,
                                                heart.body(geometry::kValvularPlaneBody), group, names, units,
-                                               resume_from ? &resumed_frames_ms : nullptr);
+                                               std::move(node_vm_mv), resume_from ? &resumed_frames_ms : nullptr);
     const bool phase_zero = std::find(field_phases.begin(), field_phases.end(), 0.0) != field_phases.end();
     if (!resume_from && (fs.field_interval_ms > 0 || phase_zero))
       fields->frame(0.0, fluid, group, node_wss_pa(fluid_module.wall_shear()));
@@ -1518,7 +1570,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (desc_series) add("descending_aorta_pressure_mmhg", "mmHg", p_desc);
   add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
   {
-    std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.scene);
+    std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.fluid.density_kg_per_m3, s.scene);
     M["beats_completed"] = static_cast<double>(beats.size());
     M["heart_rate_bpm"] = 60000.0 / period_ms;
     // the last whole beat's metrics also at the top (metrics.json, systole-plot-beat); present

@@ -59,11 +59,13 @@ const std::vector<std::string>& fsei_metric_names();
 // scene's definitions (solver/diagnostics/beat_metrics.h: EDV, ESV, EF, CO, valve phases, E
 // and A waves, ...) with valves open while their flow exceeds 5 % of its peak (ours), and each
 // beat's peaks of the kinetic energy, twist, strains, tip velocities, cusps' WSS, LA volume and
-// pressure; "beat" (1, 2, ...) and "beat_start_s". A beat without samples at both ends (a
-// run that stopped inside it) is left out. Needs the series the scene writes
-// (std::invalid_argument otherwise); a non-finite metric is an InstabilityError of `scene`.
+// pressure; the aortic closure's twist and the aortic flow's reversal; the open mitral valve's
+// mean gradient and effective orifice area (blood of blood_density_kg_per_m3); "beat" (1, 2,
+// ...) and "beat_start_s". A beat without samples at both ends (a run that stopped inside it)
+// is left out. Needs the series the scene writes and a density > 0 (std::invalid_argument
+// otherwise); a non-finite metric is an InstabilityError of `scene`.
 std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<Series>& series, double period_ms,
-                                                             const std::string& scene);
+                                                             double blood_density_kg_per_m3, const std::string& scene);
 
 // Whether the mitral limiter holds at time t_ms (structure.mitral_limiter_end_phase): over the
 // phases [0, end_phase) of every beat of period_ms, always when end_phase >= 1. The phase is

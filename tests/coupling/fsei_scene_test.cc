@@ -221,7 +221,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
                              -10 * std::sin(pi * tb / T), -0.15, -0.2, 0.5, 1.2, 3};
     for (std::size_t k = 0; k < series.size(); ++k) series[k].values.push_back(values[k]);
   }
-  const auto beats = fsei_beat_metrics(series, T, "fsi");
+  const auto beats = fsei_beat_metrics(series, T, 1060, "fsi");
   ASSERT_EQ(beats.size(), 2u);  // the half beat at the end is left out
   const double ao_close_ms = 300 - 250 * std::asin(0.05) / pi, mi_close_ms = 800 - 460 * std::asin(0.05) / pi;
   const double esv = volume(ao_close_ms), edv = volume(0);
@@ -245,12 +245,33 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
     EXPECT_NEAR(m.at("aortic_flow_reversal_phase"), 300 / T, 1e-9);  // the sine ends at 0 at 300 ms
     EXPECT_EQ(m.at("lv_longitudinal_strain_min"), -0.15);
     EXPECT_EQ(m.at("la_volume_max_ml"), 40);
+    // the open mitral valve: LA 9 mmHg, the LV curve above; means over the open interval by a fine midpoint rule
+    const double t_open = (340 + 460 * std::asin(0.05) / pi), t_close = mi_close_ms;
+    double q_sum = 0, dp_sum = 0;
+    const int steps = 200000;
+    for (int i = 0; i < steps; ++i) {
+      const double tb = t_open + (t_close - t_open) * (i + 0.5) / steps;
+      q_sum += mitral(tb);
+      dp_sum += 9 - (tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0);
+    }
+    const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;  // ml/s, mmHg
+    EXPECT_NEAR(m.at("mitral_mean_gradient_mmhg"), dp_mean, 0.01);
+    const double area_cm2 = q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060));
+    EXPECT_NEAR(m.at("mitral_effective_orifice_area_cm2"), area_cm2, 0.01 * area_cm2);
   }
+  // an LV above the LA through the filling: the gradient is reported, no orifice area (no NaN, no infinity)
+  std::vector<Series> reversed = series;
+  for (double& p : reversed[2].values) p = 7;
+  for (const auto& m : fsei_beat_metrics(reversed, T, 1060, "fsi")) {
+    EXPECT_LT(m.at("mitral_mean_gradient_mmhg"), 0);
+    EXPECT_EQ(m.count("mitral_effective_orifice_area_cm2"), 0u);
+  }
+  EXPECT_THROW(fsei_beat_metrics(series, T, 0, "fsi"), std::invalid_argument);
   // a non-finite sample is a diagnosis, never a metric; a missing series a programming error
   series[8].values[1200] = std::nan("");  // the kinetic energy in beat 2
-  EXPECT_THROW(fsei_beat_metrics(series, T, "fsi"), InstabilityError);
+  EXPECT_THROW(fsei_beat_metrics(series, T, 1060, "fsi"), InstabilityError);
   series.erase(series.begin() + 4);
-  EXPECT_THROW(fsei_beat_metrics(series, T, "fsi"), std::invalid_argument);
+  EXPECT_THROW(fsei_beat_metrics(series, T, 1060, "fsi"), std::invalid_argument);
 }
 
 TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
@@ -523,11 +544,39 @@ TEST(FseiScene, TheFirstTenthOfABeatAtTheDefaultsContractsBehindClosedValves) {
 // the same setting): 20-60 ms aortic -0.16 ml, mitral -0.77 ml, LV 0.7 -> 37.2 mmHg, leak 0.33 ml
 // = 0.68 ml/s per mmHg (scene fsi, CW: 0.45). ~3 min on one core.
 TEST(FseiScene, TheEpDrivenWallsContractTheLvBehindClosedValves) {
-  const config::Scenario s = config::parse_scenario(
-      {{"scene", "fsei"}, {"fsei", {{"end_time_ms", 60.0}}}, {"outputs", {{"time_series_interval_ms", 1.0}}}});
+  const auto dir = fresh_directory("ep");
+  const config::Scenario s = config::parse_scenario({{"scene", "fsei"},
+                                                     {"fsei", {{"end_time_ms", 60.0}, {"field_interval_ms", 60.0}}},
+                                                     {"outputs", {{"time_series_interval_ms", 1.0}}}});
   ASSERT_EQ(s.fsei.defaults, "calibrated");
-  Quiet control;
+  ToDirectory control(dir);
   const RunResult r = run_fsei(s, control);
+  // The frames carry the EP's transmembrane potential on the walls (mV, gzip-compressed per-node
+  // arrays): at t = 0 the LA, stimulated av_delay earlier, is depolarised and the LV, stimulated
+  // now, is still at rest; by 60 ms the LV's activation has spread over most of its wall.
+  EXPECT_EQ(r.metrics.at("field_frames"), 2.0);
+  auto fraction_above = [&](int k, const std::string& body, double level_mv) {
+    std::vector<hsize_t> dims;
+    const auto vm = read_doubles(dir / "fsei_bodies.h5", "frames/" + std::to_string(k) + "/" + body + "_vm_mv", dims);
+    EXPECT_FALSE(vm.empty()) << body << " frame " << k;
+    std::size_t above = 0, with_ep = 0;
+    for (double v : vm)
+      if (std::isfinite(v)) {
+        ++with_ep;
+        above += v > level_mv ? 1 : 0;
+        EXPECT_GT(v, -100.0);
+        EXPECT_LT(v, 60.0);
+      }
+    EXPECT_GT(with_ep, vm.size() / 2) << body;  // NaN only where a node has no EP node
+    return with_ep ? static_cast<double>(above) / static_cast<double>(with_ep) : 0.0;
+  };
+  EXPECT_GT(fraction_above(0, "la", -40), 0.5);
+  EXPECT_LT(fraction_above(0, "lv", -60), 0.05);
+  EXPECT_GT(fraction_above(1, "lv", -40), 0.5);
+  std::ifstream xmf(dir / "fsei_fields.xmf");
+  const std::string text((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("fsei_bodies.h5:/frames/1/lv_vm_mv"), std::string::npos);
+  std::filesystem::remove_all(dir);
   // the EP's own step: the av delay's pre-run and 60 ms, each a whole number of its steps
   const double dt_ep = s.electro.time_step_ms;
   EXPECT_EQ(r.metrics.at("ep_steps"), std::round(s.av_delay_ms / dt_ep) + std::round(60.0 / dt_ep));
@@ -696,6 +745,21 @@ TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
     const auto t = read_doubles(bodies, "frames/" + std::to_string(k) + "/time_ms", dims);
     ASSERT_EQ(t.size(), 1u);
     EXPECT_NEAR(t[0], 0.1 * k, 1e-9);
+  }
+  {  // the per-node arrays carry shuffle + gzip, as HDF5 records in the dataset
+    const hid_t f = H5Fopen(bodies.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const hid_t d = H5Dopen2(f, "frames/2/lv_positions_mm", H5P_DEFAULT);
+    const hid_t dcpl = H5Dget_create_plist(d);
+    std::vector<H5Z_filter_t> filters;
+    for (int i = 0; i < H5Pget_nfilters(dcpl); ++i) {
+      unsigned flags = 0, config = 0;
+      std::size_t n = 0;
+      filters.push_back(H5Pget_filter2(dcpl, static_cast<unsigned>(i), &flags, &n, nullptr, 0, nullptr, &config));
+    }
+    EXPECT_EQ(filters, (std::vector<H5Z_filter_t>{H5Z_FILTER_SHUFFLE, H5Z_FILTER_DEFLATE}));
+    H5Pclose(dcpl);
+    H5Dclose(d);
+    H5Fclose(f);
   }
   const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
   const auto& lv = heart.body(geometry::kLvBody).position_mm;
