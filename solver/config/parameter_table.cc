@@ -151,6 +151,12 @@ std::vector<Param> build_table() {
                            "from commissure to commissure, with vertical coaptation strips; at least 0.6 (the "
                            "closed cusps' tips are at 0.5). 0 gives the flat-annulus cusps of sessions 1-7, "
                            "which do not carry the aortic pressure (docs/geometry.md, docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(geometry.darcy_region_length_per_diameter, "-", 1.5, 0.25, 20,
+                           "Length of the Darcy outflow region (scenes 'fsi'/'fsei': the sink -u/k of "
+                           "fluid.darcy_permeability) at the end of the thoracic descending aorta, in descending-aorta "
+                           "diameters (ours: the seed places it near the aorta's end without a length). The region must "
+                           "lie inside the descending aorta's straight part, one diameter below the arch; a longer one "
+                           "is refused with the largest allowed (docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_root_diameter_mm, "mm", 40, 15, 70, "Aortic root diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_arch_diameter_mm, "mm", 30, 10, 60, "Aortic arch diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_descending_diameter_mm, "mm", 22, 8, 50,

@@ -41,6 +41,7 @@ struct Geometry {
   double marker_spacing_fraction;
   double valve_gap_mm;  // between the free edges of neighbouring closed leaflets / cusps (ours)
   double aortic_commissure_height_per_radius;  // crown-shaped cusp attachment; 0: flat annulus (ours)
+  double darcy_region_length_per_diameter;     // the Darcy outflow region's length / descending diameter (ours)
 };
 
 struct Stimulus {

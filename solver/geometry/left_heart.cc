@@ -30,7 +30,6 @@ constexpr double kCuspHeightPerRadius = 0.5;    // closed cusp tip height / aort
 constexpr double kArchRadiusPerTubeRadius = 1.3;  // minimum arch bend radius
 constexpr double kLayoutGapMm = 4.0;      // design gap used to place the descending aorta
 constexpr double kPatchRadiusMm = 5.0;    // Bachmann and His stimulus patches
-constexpr double kOutflowLengthPerDiameter = 1.5;
 constexpr double kDescendingTaperPerDiameter = 2.0;
 constexpr double kCrownInsetPerEdge = 0.15;  // cusp attachment inside the root's faces
 constexpr double kMitralCoaptationPerLength = 0.35;  // closed mitral: coaptation strip / leaflet
@@ -854,7 +853,23 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   TriMesh aorta;
   aorta.name = std::string(kAortaBody);
   aorta.kind = BodyKind::kVessel;
-  const double s_outflow = s_end - kOutflowLengthPerDiameter * 2 * r_desc;
+  // The Darcy outflow region: the descending aorta's last darcy_region_length_per_diameter
+  // diameters, where the tube has its own radius: below the taper from the arch's radius
+  // (kDescendingTaperPerDiameter diameters) and one radius more (the scenes' probe of the
+  // descending aorta sits one radius above the region).
+  {
+    const double d_desc = 2 * r_desc, straight_mm = s_end - s_arch1;
+    const double longest = (straight_mm - kDescendingTaperPerDiameter * d_desc - r_desc) / d_desc;
+    require(g.darcy_region_length_per_diameter <= longest,
+            "geometry.darcy_region_length_per_diameter = " + num(g.darcy_region_length_per_diameter) + " (" +
+                num(g.darcy_region_length_per_diameter * d_desc) +
+                " mm) puts the Darcy region outside the descending aorta's straight tube: below the arch it is " +
+                num(straight_mm) + " mm long, its first " + num(kDescendingTaperPerDiameter * d_desc) +
+                " mm taper from the arch's diameter, so at most " + num(longest) + " descending diameters (" +
+                num(longest * d_desc) + " mm) fit (aortic_descending_diameter_mm = " +
+                num(g.aortic_descending_diameter_mm) + ")");
+  }
+  const double s_outflow = s_end - g.darcy_region_length_per_diameter * 2 * r_desc;
   {
     // Rotation-minimising frame by parallel transport on a fine centreline sampling.
     const int dense = std::max(400, static_cast<int>(s_end / 0.1));

@@ -392,12 +392,14 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     // coefficient of 1): the mean transmitral gradient LA − LV and the effective orifice area
     // A = Q̄ / sqrt(2 Δp̄ / ρ) over the valve's open interval (its opening to its closure, or to the beat's end);
     // a healthy adult's mitral valve has 4-6 cm² and < 2 mmHg mean gradient, a severe stenosis < 1 cm²
-    // (Baumgartner et al., J Am Soc Echocardiogr 22:1-23, 2009). Left out when the valve did not open or the mean
-    // gradient is not positive.
+    // (Baumgartner et al., J Am Soc Echocardiogr 22:1-23, 2009). A closure before the opening is the previous
+    // beat's A wave ending: the interval then runs to the beat's end. The area is left out when the valve did not
+    // open or the mean gradient or flow is not positive.
     if (const auto open = m.find("mitral_valve_open_phase"); open != m.end()) {
       const double t_open = start + open->second * period_s;
       const auto close = m.find("mitral_valve_close_phase");
-      const double t_close = close != m.end() ? start + close->second * period_s : stop;
+      const double t_close =
+          close != m.end() && close->second > open->second ? start + close->second * period_s : stop;
       const std::span<const double> la = window("la_pressure_mmhg");
       std::vector<double> t, q, dp;  // the open interval, its ends interpolated
       auto push = [&](double at) {

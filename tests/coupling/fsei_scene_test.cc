@@ -224,6 +224,23 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   const auto beats = fsei_beat_metrics(series, T, 1060, "fsi");
   ASSERT_EQ(beats.size(), 2u);  // the half beat at the end is left out
   const double ao_close_ms = 300 - 250 * std::asin(0.05) / pi, mi_close_ms = 800 - 460 * std::asin(0.05) / pi;
+  // the open mitral valve's mean gradient LA − LV and effective area Q̄ / sqrt(2 Δp̄ / ρ) from its opening to
+  // t_close (ms in the beat), by a fine midpoint rule on the exact curves
+  struct OpenMitral {
+    double gradient_mmhg, area_cm2;
+  };
+  auto open_mitral = [&](double t_close) {
+    const double t_open = 340 + 460 * std::asin(0.05) / pi;
+    double q_sum = 0, dp_sum = 0;
+    const int steps = 200000;
+    for (int i = 0; i < steps; ++i) {
+      const double tb = t_open + (t_close - t_open) * (i + 0.5) / steps;
+      q_sum += mitral(tb);
+      dp_sum += 9 - (tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0);
+    }
+    const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;  // ml/s, mmHg
+    return OpenMitral{dp_mean, q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060))};
+  };
   const double esv = volume(ao_close_ms), edv = volume(0);
   for (std::size_t b = 0; b < 2; ++b) {
     const auto& m = beats[b];
@@ -246,18 +263,24 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
     EXPECT_EQ(m.at("lv_longitudinal_strain_min"), -0.15);
     EXPECT_EQ(m.at("la_volume_max_ml"), 40);
     // the open mitral valve: LA 9 mmHg, the LV curve above; means over the open interval by a fine midpoint rule
-    const double t_open = (340 + 460 * std::asin(0.05) / pi), t_close = mi_close_ms;
-    double q_sum = 0, dp_sum = 0;
-    const int steps = 200000;
-    for (int i = 0; i < steps; ++i) {
-      const double tb = t_open + (t_close - t_open) * (i + 0.5) / steps;
-      q_sum += mitral(tb);
-      dp_sum += 9 - (tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0);
+    const OpenMitral expected = open_mitral(mi_close_ms);
+    EXPECT_NEAR(m.at("mitral_mean_gradient_mmhg"), expected.gradient_mmhg, 0.01);
+    EXPECT_NEAR(m.at("mitral_effective_orifice_area_cm2"), expected.area_cm2, 0.01 * expected.area_cm2);
+  }
+  // the previous beat's A wave still running at a beat's start (a flow of half the peak over its first 20 ms, in
+  // every beat): the valve "closes" at 20 ms, opens as before, and its open interval runs to the beat's end
+  {
+    std::vector<Series> carried = series;
+    for (std::size_t i = 0; i < carried[0].values.size(); ++i)
+      if (std::fmod(static_cast<double>(i), T) < 20) carried[7].values[i] = 0.5 * Q;
+    const auto carried_beats = fsei_beat_metrics(carried, T, 1060, "fsi");
+    ASSERT_EQ(carried_beats.size(), 2u);
+    const OpenMitral expected = open_mitral(T);
+    for (const auto& m : carried_beats) {
+      EXPECT_LT(m.at("mitral_valve_close_phase"), m.at("mitral_valve_open_phase"));
+      EXPECT_NEAR(m.at("mitral_mean_gradient_mmhg"), expected.gradient_mmhg, 0.01);
+      EXPECT_NEAR(m.at("mitral_effective_orifice_area_cm2"), expected.area_cm2, 0.01 * expected.area_cm2);
     }
-    const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;  // ml/s, mmHg
-    EXPECT_NEAR(m.at("mitral_mean_gradient_mmhg"), dp_mean, 0.01);
-    const double area_cm2 = q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060));
-    EXPECT_NEAR(m.at("mitral_effective_orifice_area_cm2"), area_cm2, 0.01 * area_cm2);
   }
   // an LV above the LA through the filling: the gradient is reported, no orifice area (no NaN, no infinity)
   std::vector<Series> reversed = series;
@@ -279,6 +302,11 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   const std::string coarse = error_of(seed_scenario("fsi", {{"fsei", {{"resolution", "custom"}}}, {"fluid", {{"nx", 33}, {"ny", 33}, {"nz", 37}}}}));
   EXPECT_NE(coarse.find("too coarse for the valves"), std::string::npos) << coarse;
   EXPECT_NE(coarse.find("at least 8 are needed"), std::string::npos) << coarse;
+  // A Darcy region reaching out of the descending aorta's straight tube: refused with the longest that fits.
+  const std::string darcy = error_of(seed_scenario("fsi", {{"geometry", {{"darcy_region_length_per_diameter", 3.0}}}}));
+  EXPECT_NE(darcy.find("geometry.darcy_region_length_per_diameter = 3"), std::string::npos) << darcy;
+  EXPECT_NE(darcy.find("outside the descending aorta"), std::string::npos) << darcy;
+  EXPECT_NE(darcy.find("at most 1.818 descending diameters"), std::string::npos) << darcy;
   // The heart does not fit the box.
   const std::string box = error_of(seed_scenario("fsi", {{"fluid", {{"box_x_mm", 50}}}}));
   EXPECT_NE(box.find("box"), std::string::npos) << box;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
@@ -386,6 +387,32 @@ TEST(Heart, CommissureHeightIsCheckedAndZeroGivesTheFlatCusps) {
       if (b.region[i] & kAnchor) {
         EXPECT_NEAR(b.position_mm[i].z(), flat.plane.z_mm, 1e-9) << b.name;
       }
+}
+
+// The Darcy outflow region (geometry.darcy_region_length_per_diameter) lies in the descending
+// aorta's straight tube: below the arch it runs root height (0.5 root diameters, 20 mm) + LV
+// length (75 mm) = 95 mm, of which the first 2 descending diameters (44 mm) taper from the
+// arch's diameter and one radius (11 mm) is left for the descending probe: at most 40 mm = 1.818
+// diameters. Longer is refused naming the field and that maximum; the region is as long as asked.
+TEST(Heart, ADarcyRegionOutsideTheDescendingAortaIsRefusedWithTheLongestThatFits) {
+  auto s = defaults();
+  const double d = s.geometry.aortic_descending_diameter_mm;
+  const double longest = (0.5 * s.geometry.aortic_root_diameter_mm + s.geometry.lv_long_axis_mm - 2 * d - 0.5 * d) / d;
+  EXPECT_NEAR((build(s).outflow.end_mm - build(s).outflow.start_mm).norm(), 1.5 * d, 1e-9);  // the default
+  s.geometry.darcy_region_length_per_diameter = 1.8;
+  EXPECT_NEAR((build(s).outflow.end_mm - build(s).outflow.start_mm).norm(), 1.8 * d, 1e-9);
+  s.geometry.darcy_region_length_per_diameter = 1.85;
+  try {
+    build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("geometry.darcy_region_length_per_diameter = 1.85"), std::string::npos) << what;
+    EXPECT_NE(what.find("outside the descending aorta"), std::string::npos) << what;
+    char most[32];
+    std::snprintf(most, sizeof most, "at most %.4g descending diameters", longest);
+    EXPECT_NE(what.find(most), std::string::npos) << what << " (expected '" << most << "')";
+  }
 }
 
 TEST(Heart, BoxTooSmallIsRejectedNamingTheBox) {
