@@ -134,6 +134,23 @@ TEST_F(ServiceE2E, FsiJobRunsOnTheWorkersWithChamberMetricsAndFields) {
     EXPECT_TRUE(names.count(f)) << f;
 }
 
+TEST_F(ServiceE2E, FseiJobRunsOnTheWorkersWithItsElectrophysiology) {
+  // Scene "fsei" (EP-driven tension) through the service: the first millisecond after the EP's
+  // pre-run from the LA stimulus, one field frame at its end. The physics: tests/coupling.
+  const nlohmann::json scenario{{"scene", "fsei"}, {"fsei", {{"end_time_ms", 1}, {"field_interval_ms", 1}}}};
+  const std::string id = submit(*server_, scenario);
+  ASSERT_TRUE(wait_for_state(*server_, id, v1::SUCCEEDED, std::chrono::seconds(300))) << server_->log();
+  const v1::Result result = get_result(*server_, id);
+  ASSERT_TRUE(result.metrics().contains("ep_steps"));
+  EXPECT_GT(result.metrics().at("ep_steps"), 0);  // the EP ran at its own step
+  EXPECT_EQ(result.metrics().at("field_frames"), 2);  // t = 0 and 1 ms
+  for (const auto& [key, value] : result.metrics()) EXPECT_TRUE(std::isfinite(value)) << key;
+  std::set<std::string> names;
+  for (const auto& a : result.artifacts()) names.insert(a.name());
+  for (const char* f : {"metrics.json", "result.h5", "time_series.csv", "fsei_bodies.h5", "fsei_fields.xmf"})
+    EXPECT_TRUE(names.count(f)) << f;
+}
+
 TEST_F(ServiceE2E, WatchStreamsStatesInOrderAndResumes) {
   const std::string id = submit(*server_, {{"scene", "lumped"}, {"beats", 5}, {"periodicity_tolerance", 0}});
   std::vector<v1::JobEvent> events;
