@@ -660,15 +660,16 @@ std::vector<Param> build_table() {
                              "the loads last written, then the fluid at their new shape; strong coupling only). "
                              "structure_first measures an interval's first pass too (the loads it makes against "
                              "those the shells used), so an interval whose loads change less than "
-                             "coupling.strong_tolerance ends after one pass instead of two. Experimental: in the "
-                             "heart such one-pass intervals let an oscillation of the LV wall and its blood grow "
-                             "in the ejection (the LV pressure ±6 mmHg at a 2-ms period; docs/fsei.md session 20)."));
+                             "coupling.strong_tolerance ends after one pass instead of two. Alone (with the lagging "
+                             "'last' guess) such one-pass intervals let an oscillation of the LV wall and its blood "
+                             "grow in the ejection (docs/fsei.md session 20); with the 'linear' first-pass guess it "
+                             "is part of the fsi/fsei calibrated defaults (sessions 21, 24)."));
   t.push_back(SYSTOLE_CHOICE(fsei.first_pass_predictor, "last", (std::vector<std::string_view>{"last", "linear"}),
                              "Scenes 'fsei'/'fsi' with fsei.coupling_order = structure_first: the loads the shells "
                              "take in an interval's first pass: last (those last written: they lag one interval) "
                              "or linear (ours: extrapolated from the last two intervals' loads, a second-order "
-                             "guess; the first pass's residual then measures the guess). Experimental "
-                             "(docs/fsei.md session 21)."));
+                             "guess; the first pass's residual then measures the guess); linear is part of the "
+                             "fsi/fsei calibrated defaults (docs/fsei.md sessions 21, 24)."));
   t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
                              "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
                              "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "
@@ -709,10 +710,11 @@ std::vector<Param> build_table() {
                            "moved more than this x h since the last build (ours; 0: after any move; 0.1 saved 20 % "
                            "of a coarse step and moved the LV pressure at 16 ms by 0.45 %: docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(fsei.aortic_pressure_mmhg, "mmHg", 60, 0, 150,
-                           "Scenes 'fsei'/'fsi': the aorta's ground pressure at t = 0 (the seed's 60 mmHg "
-                           "pre-tension): an outer pressure on the aorta's wall outside the Darcy region "
-                           "(ours: a follower load, held) with the blood inside the aorta started at it, so "
-                           "the built aorta is in equilibrium (docs/fsei.md)."));
+                           "Scenes 'fsei'/'fsi': the aorta's ground pressure (the seed's 60 mmHg pre-tension), "
+                           "held as fsei.aortic_pretension says: an outer pressure on the aorta's wall outside the "
+                           "Darcy region (ours: a follower load, held) with the blood inside the aorta started at "
+                           "it, so the built aorta is in equilibrium; or partly by the wall's pre-stress "
+                           "(fsei.aortic_prestress_fraction) and the outer load the rest (docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(fsei.aortic_pressure_ramp_ms, "ms", 0, 0, 200,
                            "Scenes 'fsei'/'fsi': 0: the aorta's ground pressure is there at t = 0 (blood inside "
                            "started at it); else the outer load on the aorta's wall rises linearly over this time "
@@ -721,7 +723,8 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi': 0: no fields; else a frame every this from t = 0, and one of the "
                            "bodies when a run stops unstable: the fluid's velocity (m/s), pressure (mmHg) and "
                            "vorticity (1/s) in fsei_fluid_<k>.h5, every body's nodes (positions, velocities, the "
-                           "largest edge strain, the active tension) in fsei_bodies.h5, and fsei_fields.xmf that "
+                           "largest edge strain, the wall shear stress; the LV's and LA's active tension and, in "
+                           "scene fsei, transmembrane potential) in fsei_bodies.h5, and fsei_fields.xmf that "
                            "shows them together in ParaView (mm), in the output directory."));
   t.push_back(SYSTOLE_REAL(fsei.checkpoint_interval_ms, "ms", 10, 0, 1e5,
                            "Scenes 'fsei'/'fsi': the whole coupled state is checkpointed every this much simulated "

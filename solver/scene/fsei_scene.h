@@ -1,6 +1,7 @@
 #pragma once
 // Scenes "fsei" and "fsi" (issue #9, docs/fsei.md): the procedural left heart immersed in the
-// blood of the fluid box, every body forced by MLS direct forcing, the deformable ones moved by
+// blood of the fluid box, every body forced by direct forcing (the seed's MLS, or the divergence-
+// free kernel of the calibrated defaults: fsei.forcing_kernel), the deformable ones moved by
 // their thin shells, the LV and LA contracting (fsei: tension from the EP of the electro scene;
 // fsi: a prescribed activation waveform instead of EP). One synchronisation interval of the
 // multirate scheduler reads like the seed's Fig. 6:
