@@ -363,9 +363,6 @@ TEST(FseiScene, TheLAsPrescribedPeakIsItsFractionOfTheLVs) {
   EXPECT_NE(big.find("2.5"), std::string::npos) << big;
 }
 
-// The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
-// off after, on again at the next beat's start, also at a time a rounding below it; always
-// with end 1.
 // fsei.slab_split = "balanced": a plane's work is its cells plus kIbToFluidWork x the grid's
 // cells x its share of the markers; split by it, two ranks get equal work to a plane's, while
 // equal blocks leave the markers' side with most of it.
@@ -390,6 +387,9 @@ TEST(FseiScene, TheBalancedSlabsShareTheMarkersWork) {
   EXPECT_THROW(slab_plane_weights(g, {0.5, std::nan("")}), std::invalid_argument);
 }
 
+// The mitral limiter's window (the seed's: in systole only): on over [0, end) T of every beat,
+// off after, on again at the next beat's start, also at a time a rounding below it; always
+// with end 1.
 TEST(FseiScene, TheMitralLimiterHoldsOverItsWindowOfEveryBeat) {
   const double T = 857.142857142857;  // 70 bpm
   EXPECT_TRUE(mitral_limiter_holds(0, T, 0.4));
@@ -403,10 +403,6 @@ TEST(FseiScene, TheMitralLimiterHoldsOverItsWindowOfEveryBeat) {
   for (double t : {0.0, 0.4 * T, T - 1e-12, T - 1e-3, 5.7 * T}) EXPECT_TRUE(mitral_limiter_holds(t, T, 1.0)) << t;
 }
 
-// The first 3 ms of systole at the coarse preset, prescribed tension (fsi): everything is
-// assembled and steps (fluid at its CFL step, structure sub-cycled, loads and nodes exchanged),
-// the LV pressure rises above the LA and the aortic root while the valves stay closed. Without
-// the aorta's ground pressure: the closed aortic valve does not carry it yet (docs/fsei.md).
 // The phase-averaged wall shear stress file (the seed's Figs. 16-17): two bodies, node values
 // j + node/100 + c_k in phase bin j of beat k (3 beats, the first discarded): every body's bins
 // hold mean j + node/100 + mean(c) and rms |c_2 - c_3| / 2, on the stress-free mesh, with an xmf
@@ -458,6 +454,10 @@ TEST(FseiFields, WssPhaseAverageFileHoldsEveryBodysBins) {
   std::filesystem::remove_all(dir);
 }
 
+// The first 3 ms of systole at the coarse preset, prescribed tension (fsi): everything is
+// assembled and steps (fluid at its CFL step, structure sub-cycled, loads and nodes exchanged),
+// the LV pressure rises above the LA and the aortic root while the valves stay closed. Without
+// the aorta's ground pressure: the closed aortic valve does not carry it yet (docs/fsei.md).
 TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aortic_pressure_mmhg", 0.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
   Quiet control;
@@ -523,12 +523,6 @@ TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
   EXPECT_GT(wss.back(), 0.0);
 }
 
-// The seed's aorta pre-tension (fsei.aortic_pressure_mmhg, 60 mmHg by default): the blood in the
-// aorta starts at the ground pressure and the outer load on the wall holds it, so after the
-// first coupling interval the aortic-root probe reads it (within 15 %) while the LV and the LA,
-// behind the closed valves, stay near the outer fluid's pressure; the note gives the aorta's
-// blood volume started at it (the default aorta's lumen is ≈ 110 ml by its radii and lengths:
-// root ≈ 16, arch ≈ 50, descending ≈ 43 ml).
 // The healthy beat in CI-sized form: the first 0.1 T (85 ms at 70 bpm) of scene fsi at
 // its defaults (the calibrated setting, docs/fsei.md: coarse, 65 x 65 x 93 in the 180-mm box),
 // the isovolumic contraction. Asserted from the physics of that phase, not from a run's output:
@@ -660,6 +654,12 @@ TEST(FseiScene, TheDivergenceFreeKernelTightensTheAortasWall) {
   }
 }
 
+// The seed's aorta pre-tension (fsei.aortic_pressure_mmhg, 60 mmHg by default): the blood in the
+// aorta starts at the ground pressure and the outer load on the wall holds it, so after the
+// first coupling interval the aortic-root probe reads it (within 15 %) while the LV and the LA,
+// behind the closed valves, stay near the outer fluid's pressure; the note gives the aorta's
+// blood volume started at it (the default aorta's lumen is ≈ 110 ml by its radii and lengths:
+// root ≈ 16, arch ≈ 50, descending ≈ 43 ml).
 TEST(FseiScene, AortaStartsAtItsGroundPressure) {
   const config::Scenario s =
       seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}});
@@ -728,10 +728,6 @@ TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
   EXPECT_GT(q.metrics.at("aortic_root_pressure_max_mmhg"), 0.0);
 }
 
-// Field frames (fsei.field_interval_ms = 0.1 ms, samples every 0.2 ms): frames at 0, 0.1 and
-// 0.2 ms that are not samples; the bodies start at their built shape and move; the fluid's
-// pressure is in mmHg (the aorta's 60 mmHg ground pressure at the aortic-root probe, relative
-// to the box corner) and compressed, the xmf names every frame's files.
 // Frames at requested phases of every beat (outputs.field_phases, without an interval): at
 // 240 bpm (T = 250 ms) the phases 0.0004 and 0.0008 are 0.1 and 0.2 ms; no frame at t = 0, and
 // the note says which frames were written.
@@ -759,6 +755,10 @@ TEST(FseiScene, FieldFramesAtRequestedPhases) {
   std::filesystem::remove_all(dir);
 }
 
+// Field frames (fsei.field_interval_ms = 0.1 ms, samples every 0.2 ms): frames at 0, 0.1 and
+// 0.2 ms that are not samples; the bodies start at their built shape and move; the fluid's
+// pressure is in mmHg (the aorta's 60 mmHg ground pressure at the aortic-root probe, relative
+// to the box corner) and compressed, the xmf names every frame's files.
 TEST(FseiScene, FieldFramesShowFluidAndBodiesInPhysicalUnits) {
   const auto dir = fresh_directory("fields");
   const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.2}, {"field_interval_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.2}}}});
