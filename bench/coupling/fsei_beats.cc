@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     const double density_kg_per_m3 =
         argc == 4 ? std::stod(argv[3]) : systole::config::find_parameter("fluid.density_kg_per_m3")->default_number;
     if (!(density_kg_per_m3 > 0))
-      throw systole::InputError("BLOOD_DENSITY_KG_PER_M3 must be > 0, got " + std::string(argv[3]));
+      throw systole::InputError("BLOOD_DENSITY_KG_PER_M3 must be > 0, got " + std::to_string(density_kg_per_m3));
     std::vector<systole::Series> series;
     std::string line, cell;
     std::getline(in, line);

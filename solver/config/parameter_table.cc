@@ -155,7 +155,8 @@ std::vector<Param> build_table() {
                            "Length of the Darcy outflow region (scenes 'fsi'/'fsei': the sink -u/k of "
                            "fluid.darcy_permeability) at the end of the thoracic descending aorta, in descending-aorta "
                            "diameters (ours: the seed places it near the aorta's end without a length). The region must "
-                           "lie inside the descending aorta's straight part, one diameter below the arch; a longer one "
+                           "lie in the descending aorta's straight tube: below the taper from the arch's diameter "
+                           "(2 descending diameters) and one radius more (the descending-aorta probe); a longer one "
                            "is refused with the largest allowed (docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_root_diameter_mm, "mm", 40, 15, 70, "Aortic root diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_arch_diameter_mm, "mm", 30, 10, 60, "Aortic arch diameter."));
