@@ -35,6 +35,7 @@
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
 #include "solver/scene/fsei_checkpoint.h"
+#include "solver/scene/chamber_cells.h"
 #include "solver/scene/fsei_fields.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/structure/contact.h"
@@ -366,6 +367,12 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
     // for the first ejecting run, docs/fsei.md session 11).
     bs.end_diastole_at_beat_start = true;
     std::map<std::string, double> m = diagnostics::to_map(diagnostics::compute_beat_metrics(bs));
+    // the chambers' kinetic energy (a series of runs since session 33): its peak where the series is there
+    for (const Series& x : series)
+      if (x.name == "heart_kinetic_energy_mj") {
+        const std::span<const double> v = window(x.name);
+        m["heart_kinetic_energy_max_mj"] = *std::max_element(v.begin(), v.end());
+      }
     for (const Peak& p : peaks) {
       const std::span<const double> v = window(p.series);
       double best = v[0];
@@ -1015,6 +1022,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   // spread (the root's probe reads low inside it); with q_out, the outlet's resistance.
   std::vector<double> p_desc;
   bool desc_series = true;
+  // The kinetic energy of the chambers' blood (the seed's "kinetic energy in the heart"; ke is the
+  // whole box's): the cells inside the LV and the LA closed by the valvular plane (chamber_cells.h),
+  // for a heart whose long axis runs along z (else left out with a note).
+  std::vector<double> ke_heart;
+  bool heart_ke_series = std::abs(heart.lv_axis_direction.z()) > 0.99;
+  const int lv_side = heart.lv_axis_direction.z() > 0 ? 1 : -1;
   const Vec3 outflow_axis = (heart.outflow.end_mm - heart.outflow.start_mm).normalized();
   bool outlet_series = std::abs(outflow_axis.z()) > 0.99;
   // The immersed boundary's leak seen at the walls (ours): the blood's flux through the LV's and
@@ -1121,6 +1134,27 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       }
     }
     ke.push_back(fluid.diagnostics().kinetic_energy * kinetic_mj_per_unit);
+    if (heart_ke_series) {
+      const grid::Slabs& sl = fluid.slabs();
+      const grid::Grid& gg = sl.grid();
+      const int kb = sl.k_begin(), kc = sl.k_count();
+      auto cells = [&](std::size_t body, int side) {
+        return chamber_cells(group.body(body).positions_mm(), group.body(body).stress_free_mesh().tri,
+                             heart.plane.z_mm, side, gg.nx(), gg.ny(), kb, kc, gg.dx() * kDmMm, gg.dy() * kDmMm,
+                             gg.dz() * kDmMm);
+      };
+      const std::vector<char> in_lv = cells(kLv, lv_side), in_la = cells(kLa, -lv_side);
+      const fluid::Velocity& u = fluid.velocity();
+      double sum = 0;  // Σ |u|² over the chambers' cells, the fluid's own per-cell reading (its faces at (i, j, k))
+      for (int k = 0; k < kc; ++k)
+        for (int j = 0; j < gg.ny(); ++j)
+          for (int i = 0; i < gg.nx(); ++i) {
+            const std::size_t c = (static_cast<std::size_t>(k) * gg.ny() + j) * gg.nx() + i;
+            if (in_lv[c] || in_la[c]) sum += u.u(i, j, k) * u.u(i, j, k) + u.v(i, j, k) * u.v(i, j, k) + u.w(i, j, k) * u.w(i, j, k);
+          }
+      MPI_Allreduce(MPI_IN_PLACE, &sum, 1, MPI_DOUBLE, MPI_SUM, sl.comm());
+      ke_heart.push_back(0.5 * sum / static_cast<double>(gg.cells()) * kinetic_mj_per_unit);  // as ke: a box mean × the box
+    }
     // the LV wall's twist and global strains from the built (end-diastolic, stress-free) shape
     const diagnostics::WallKinematics wk =
         diagnostics::wall_kinematics(lv_reference, group.body(kLv).positions_mm(), heart.lv_axis_direction);
@@ -1146,7 +1180,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
                      twist.back(), gls.back(), gcs.back(), u_mitral_tips.back(), u_aortic_tips.back(), wss_cusps.back(),
                      wall_slip_series ? lv_wall_slip.back() : 0.0, wall_slip_series ? aorta_wall_slip.back() : 0.0,
                      wall_slip_series ? plane_slip.back() : 0.0, outlet_series ? q_out.back() : 0.0,
-                     desc_series ? p_desc.back() : 0.0})
+                     desc_series ? p_desc.back() : 0.0, heart_ke_series ? ke_heart.back() : 0.0})
       if (!std::isfinite(v))
         throw InstabilityError("fsei", "diagnostics", 1e-3 * t_ms.back(),
                                "a chamber pressure, volume, flow, wall strain, tip velocity or wall shear stress is not finite");
@@ -1232,7 +1266,8 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"u_mitral_tips", &u_mitral_tips},        {"u_aortic_tips", &u_aortic_tips},
       {"wss_cusps", &wss_cusps},               {"lv_wall_slip", &lv_wall_slip},
       {"aorta_wall_slip", &aorta_wall_slip},   {"plane_slip", &plane_slip},
-      {"q_out", &q_out},                       {"p_desc", &p_desc}};
+      {"q_out", &q_out},                       {"p_desc", &p_desc},
+      {"ke_heart", &ke_heart}};
   double t = 0;
   set_caps(0);
   set_mitral_limiter(0);
@@ -1242,9 +1277,10 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     wall_slip_series = resumed.has("series/lv_wall_slip") && resumed.has("series/plane_slip");
     outlet_series = outlet_series && resumed.has("series/q_out");
     desc_series = resumed.has("series/p_desc");
+    heart_ke_series = heart_ke_series && resumed.has("series/ke_heart");
     for (auto& [name, v] : series_state)
       if ((wall_slip_series || (v != &lv_wall_slip && v != &aorta_wall_slip && v != &plane_slip)) &&
-          (outlet_series || v != &q_out) && (desc_series || v != &p_desc))
+          (outlet_series || v != &q_out) && (desc_series || v != &p_desc) && (heart_ke_series || v != &ke_heart))
         *v = resumed.get("series/" + name, samples);
     // (a checkpoint of an earlier version has no phase-average accumulators: they start here)
     wss_phase_from_ms = resumed.has("scene/wss_phase/beat") ? 0.0 : t;
@@ -1507,7 +1543,13 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   if (!desc_series)
     result.notes.push_back("resumed from a checkpoint without the descending aorta's pressure: "
                            "descending_aorta_pressure_mmhg is not reported");
+  if (!heart_ke_series)
+    result.notes.push_back(std::abs(heart.lv_axis_direction.z()) > 0.99
+                               ? "resumed from a checkpoint without the chambers' kinetic energy: "
+                                 "heart_kinetic_energy_mj is not reported"
+                               : "the LV's long axis does not run along z: heart_kinetic_energy_mj is not reported");
   M["kinetic_energy_max_mj"] = max_of(ke);
+  if (heart_ke_series) M["heart_kinetic_energy_max_mj"] = max_of(ke_heart);
   auto largest = [](const std::vector<double>& v) {  // the sample of largest magnitude, signed
     double best = 0;
     for (double x : v) if (std::abs(x) > std::abs(best)) best = x;
@@ -1558,6 +1600,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   add("aortic_flow_ml_s", "ml/s", q_ao);
   add("mitral_flow_ml_s", "ml/s", q_mi);
   add("kinetic_energy_mj", "mJ", ke);
+  if (heart_ke_series) add("heart_kinetic_energy_mj", "mJ", ke_heart);
   add("lv_twist_deg", "deg", twist);
   add("lv_longitudinal_strain", "", gls);
   add("lv_circumferential_strain", "", gcs);
