@@ -6,7 +6,8 @@
 // aortic: the three cusps, loaded from the aorta; mitral: the two leaflets loaded from the LV
 // (a negative pressure_mmhg opens the valve: loaded from the aorta's / the LA's side instead),
 // with the scenario's limiter. Prints per ms: pressure, the largest displacement from the built
-// shape, the largest and smallest edge strain, the active contact pairs and the stable substep.
+// shape, the largest and smallest edge strain, the active contact pairs, the stable substep and,
+// for the mitral valve, the gap between the free edges' middles (its opening).
 // VALVE_LOAD_DUMP=file writes, at the end or when the valve fails, one line per node
 // (body x0 y0 z0 x y z) then one per triangle (-1-body a b c 0 0 0).
 #include <cmath>
@@ -64,15 +65,19 @@ int main(int argc, char** argv) {
     scene::ClosedValveLoad load(s, aortic ? scene::Valve::kAortic : scene::Valve::kMitral, damping);
     std::printf("# %s valve, %.1f mmHg ramped over %.1f ms, held %.1f ms, damping %.2f /ms, gap %.2f mm\n",
                 argv[1], p_mmhg, ramp_ms, hold_ms, damping, s.geometry.valve_gap_mm);
-    std::printf("# t_ms p_mmhg max_disp_mm max_strain min_strain contact_pairs stable_step_ms\n");
+    std::printf("# t_ms p_mmhg max_disp_mm max_strain min_strain contact_pairs stable_step_ms%s\n",
+                aortic ? "" : " free_edge_gap_mm");
     const double end = ramp_ms + hold_ms;
     try {
       for (double t = 0.5; t <= end + 1e-9; t += 0.5) {
         const double f = ramp_ms > 0 ? std::min(1.0, t / ramp_ms) : 1.0;
         const scene::ValveLoadSample r = load.advance(0.5, f * p_mmhg);
-        if (std::abs(t - std::round(t)) < 1e-9)
-          std::printf("%5.1f %7.2f %8.3f %8.4f %8.4f %d %.3g\n", r.t_ms, r.pressure_mmhg, r.max_displacement_mm,
+        if (std::abs(t - std::round(t)) < 1e-9) {
+          std::printf("%5.1f %7.2f %8.3f %8.4f %8.4f %d %.3g", r.t_ms, r.pressure_mmhg, r.max_displacement_mm,
                       r.max_strain, r.min_strain, r.contact_pairs, r.stable_step_ms);
+          if (!aortic) std::printf(" %.2f", load.mitral_free_edge_gap_mm());
+          std::printf("\n");
+        }
       }
     } catch (const std::exception&) {
       dump_state(load);

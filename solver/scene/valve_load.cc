@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <stdexcept>
 
 #include "solver/core/errors.h"
 #include "solver/core/units.h"
@@ -77,6 +78,22 @@ ValveLoadSample ClosedValveLoad::sample(double pressure_mmhg) const {
   }
   s.contact_pairs = group_.contact_stats().active;
   return s;
+}
+
+double ClosedValveLoad::mitral_free_edge_gap_mm() const {
+  if (valve_ != Valve::kMitral) throw std::logic_error("mitral_free_edge_gap_mm: not the mitral valve");
+  double middle_x[2] = {0, 0};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto& x0 = heart_.body(names_[k]).position_mm;
+    const auto& x = group_.body(k).positions_mm();
+    double deepest = -1e300;
+    for (const auto& p : x0) deepest = std::max(deepest, p.z());
+    int n = 0;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (x0[i].z() > deepest - 3) middle_x[k] += x[i].x(), ++n;
+    middle_x[k] /= n;  // n >= 1: the deepest node itself
+  }
+  return std::abs(middle_x[0] - middle_x[1]);
 }
 
 }  // namespace systole::scene

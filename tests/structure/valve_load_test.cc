@@ -2,10 +2,11 @@
 // valves"): the crown-shaped aortic valve carries the diastolic aortic pressure and the mitral
 // valve the LV's systolic peak; the flat-annulus cusps of sessions 1-7 and the seed's leaflet c
 // in pascals do not.
-#include <cmath>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
@@ -79,8 +80,8 @@ TEST(ClosedValveLoad, MitralValveCarriesTheSystolicPeak) {
   EXPECT_LT(last.max_displacement_mm, 8.0);
 }
 
-// The gap (mm) between the two mitral leaflets' free edges at their middles (the nodes within
-// 3 mm of each leaflet's deepest, averaged in x) after `ms` of the pressure difference p_mmhg,
+// The gap (mm) between the two mitral leaflets' free edges at their middles
+// (ClosedValveLoad::mitral_free_edge_gap_mm) after `ms` of the pressure difference p_mmhg,
 // ramped over 10 ms; negative p opens the valve. The leaflets' c is `c_pa`; gap 1 mm, density
 // 3 g/ml and the area floor 0.5 as in the heart runs.
 double mitral_gap_mm(double c_pa, double p_mmhg, int ms, double* max_strain = nullptr) {
@@ -93,18 +94,7 @@ double mitral_gap_mm(double c_pa, double p_mmhg, int ms, double* max_strain = nu
   scene::ValveLoadSample last;
   for (int t = 1; t <= ms; ++t) last = load.advance(1.0, p_mmhg * std::min(1.0, t / 10.0));
   if (max_strain) *max_strain = last.max_strain;
-  double middle_x[2] = {0, 0};
-  for (std::size_t k = 0; k < 2; ++k) {
-    const auto& x0 = load.heart().body(load.body_names()[k]).position_mm;
-    const auto& x = load.group().body(k).positions_mm();
-    double deepest = -1e300;
-    for (const auto& p : x0) deepest = std::max(deepest, p.z());
-    int n = 0;
-    for (std::size_t i = 0; i < x.size(); ++i)
-      if (x0[i].z() > deepest - 3) middle_x[k] += x[i].x(), ++n;
-    middle_x[k] /= n;
-  }
-  return std::abs(middle_x[0] - middle_x[1]);
+  return load.mitral_free_edge_gap_mm();
 }
 
 // The mitral valve opens under the LA's pressure (dry, 10 mmHg from the LA, the LA-LV
@@ -128,6 +118,7 @@ TEST(ClosedValveLoad, TheMitralValveOpensUnderTheLAsPressureTheWiderTheSofter) {
 TEST(ClosedValveLoad, BadArgumentsAreRejected) {
   const config::Scenario s = config::parse_scenario(nlohmann::json::object());
   EXPECT_THROW(scene::ClosedValveLoad(s, scene::Valve::kAortic, -1), InputError);
+  EXPECT_THROW(scene::ClosedValveLoad(s, scene::Valve::kAortic, 0.5).mitral_free_edge_gap_mm(), std::logic_error);
   scene::ClosedValveLoad load(s, scene::Valve::kMitral, 0.5);
   EXPECT_THROW(load.advance(0, 10), InputError);
   EXPECT_THROW(load.advance(1, std::nan("")), InputError);
