@@ -41,13 +41,12 @@ int main(int argc, char** argv) {
     std::size_t inside = 0;
     const auto t0 = std::chrono::steady_clock::now();
     for (int r = 0; r < repeats; ++r) {
-      const std::vector<char> in_lv =
-          scene::chamber_cells(lv.position_mm, lv.tri, heart.plane.z_mm, lv_side, g.nx, g.ny, 0, g.nz, hx, hy, hz);
-      const std::vector<char> in_la =
-          scene::chamber_cells(la.position_mm, la.tri, heart.plane.z_mm, -lv_side, g.nx, g.ny, 0, g.nz, hx, hy, hz);
+      const std::vector<char> in_heart = scene::heart_chambers_cells(lv.position_mm, lv.tri, la.position_mm, la.tri,
+                                                                    heart.plane.z_mm, lv_side, g.nx, g.ny, 0, g.nz, hx,
+                                                                    hy, hz);
       inside = 0;
       for (std::size_t c = 0; c < cells; ++c)
-        if (in_lv[c] || in_la[c]) sum += u2[c], ++inside;
+        if (in_heart[c]) sum += u2[c], ++inside;
     }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / repeats;
     std::printf("preset %s: grid %dx%dx%d (%zu cells), triangles LV %zu + LA %zu, cells inside %zu (%.1f ml)\n",

@@ -10,6 +10,7 @@
 // for the mitral valve, the gap between the free edges' middles (its opening).
 // VALVE_LOAD_DUMP=file writes, at the end or when the valve fails, one line per node
 // (body x0 y0 z0 x y z) then one per triangle (-1-body a b c 0 0 0).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -65,6 +66,13 @@ int main(int argc, char** argv) {
     scene::ClosedValveLoad load(s, aortic ? scene::Valve::kAortic : scene::Valve::kMitral, damping);
     std::printf("# %s valve, %.1f mmHg ramped over %.1f ms, held %.1f ms, damping %.2f /ms, gap %.2f mm\n",
                 argv[1], p_mmhg, ramp_ms, hold_ms, damping, s.geometry.valve_gap_mm);
+    if (!aortic && s.geometry.mitral_rest_opening_mm > 0) {
+      double hi = 0, lo = 0;  // the built valve's edge strains from the rest shape
+      for (std::size_t k = 0; k < load.group().body_count(); ++k)
+        for (double e : load.group().body(k).edge_strains()) hi = std::max(hi, e), lo = std::min(lo, e);
+      std::printf("# rest opening %.2f mm: the built valve starts pre-strained, edge strains %.4f .. %.4f\n",
+                  s.geometry.mitral_rest_opening_mm, lo, hi);
+    }
     std::printf("# t_ms p_mmhg max_disp_mm max_strain min_strain contact_pairs stable_step_ms%s\n",
                 aortic ? "" : " free_edge_gap_mm");
     const double end = ramp_ms + hold_ms;

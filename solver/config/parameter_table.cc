@@ -158,6 +158,16 @@ std::vector<Param> build_table() {
                            "lie in the descending aorta's straight tube: below the taper from the arch's diameter "
                            "(2 descending diameters) and one radius more (the descending-aorta probe); a longer one "
                            "is refused with the largest allowed (docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(geometry.mitral_rest_opening_mm, "mm", 0, 0, 20,
+                           "Opening of the mitral leaflets' stress-free (rest) shape, between the middles of their free "
+                           "edges (ours): the leaflets are built closed (their initial shape, and the mitral limiter's "
+                           "reference) over a rest shape whose free edges and coaptation strips are moved apart by this "
+                           "much at the middle (opening/2 (1 - s^2) each, s from commissure to commissure), the leaflet "
+                           "length kept; so the closed valve is pre-strained and opens wider at a small pressure "
+                           "(docs/geometry.md, docs/fsei.md session 35). Each rest free edge's middle must stay within "
+                           "3/4 of the mitral radius from the orifice's centre (valve_gap_mm / 2 + opening / 2 <= "
+                           "0.75 mitral_diameter_mm / 2: 17 mm at the defaults' gap 1 mm). 0: the leaflets are "
+                           "stress-free closed (sessions 1-34)."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_root_diameter_mm, "mm", 40, 15, 70, "Aortic root diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_arch_diameter_mm, "mm", 30, 10, 60, "Aortic arch diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_descending_diameter_mm, "mm", 22, 8, 50,

@@ -42,6 +42,7 @@ struct Geometry {
   double valve_gap_mm;  // between the free edges of neighbouring closed leaflets / cusps (ours)
   double aortic_commissure_height_per_radius;  // crown-shaped cusp attachment; 0: flat annulus (ours)
   double darcy_region_length_per_diameter;     // the Darcy outflow region's length / descending diameter (ours)
+  double mitral_rest_opening_mm;  // the mitral leaflets' stress-free shape opened this far; 0: closed (ours)
 };
 
 struct Stimulus {

@@ -195,10 +195,25 @@ struct LensLeaflet {
     return detail::equal_arclength_stations(param, arc, n);
   }
 
+  // Fibres along dB/ds at each triangle's centroid (s, t), in the triangle's plane.
+  void set_fibres(TriMesh& mesh, const std::vector<Vec2>& uv) const {
+    for (std::size_t tr = 0; tr < mesh.triangle_count(); ++tr) {
+      const auto& v = mesh.tri[tr];
+      const Vec2 c = (uv[v[0]] + uv[v[1]] + uv[v[2]]) / 3.0;
+      const double e = 1e-3;
+      const Vec3 along = point(std::min(1.0, c.x() + e), c.y()) - point(std::max(-1.0, c.x() - e), c.y());
+      mesh.fibre[tr] = tangent_in_triangle(mesh, tr, along, Vec3::UnitX());
+    }
+  }
+
   // attachment: (s, position) of the attachment nodes from s = -1 to 1 (ends included), or
   // empty to sample W by equal arclength. Normals face `plus_side` at the belly (t = 0.3, s = 0).
+  // rest: when given, a lens with the same attachment W whose surface is the leaflet's stress-free
+  // shape: every node gets TriMesh::rest_position_mm = rest->point(s, t) at its own (s, t) (the
+  // attachment's nodes stay where they are) and the triangles rest fibres from it (ours).
   TriMesh build(std::string_view name, Tissue tissue, double thickness, std::uint32_t attachment_tags,
-                std::vector<std::pair<double, Vec3>> attachment, const Vec3& plus_side) const {
+                std::vector<std::pair<double, Vec3>> attachment, const Vec3& plus_side,
+                const LensLeaflet* rest = nullptr) const {
     TriMesh mesh;
     mesh.name = std::string(name);
     mesh.kind = BodyKind::kLeaflet;
@@ -274,12 +289,14 @@ struct LensLeaflet {
         if ((mesh.centroid(tr) - belly).squaredNorm() < (mesh.centroid(best) - belly).squaredNorm()) best = tr;
       if (mesh.unit_normal(best).dot(plus_side) < 0) mesh.flip_orientation();
     }
-    for (std::size_t tr = 0; tr < mesh.triangle_count(); ++tr) {
-      const auto& v = mesh.tri[tr];
-      const Vec2 c = (uv[v[0]] + uv[v[1]] + uv[v[2]]) / 3.0;
-      const double e = 1e-3;
-      const Vec3 along = point(std::min(1.0, c.x() + e), c.y()) - point(std::max(-1.0, c.x() - e), c.y());
-      mesh.fibre[tr] = tangent_in_triangle(mesh, tr, along, Vec3::UnitX());
+    set_fibres(mesh, uv);
+    if (rest) {
+      TriMesh at_rest = mesh;
+      for (std::size_t i = 0; i < mesh.node_count(); ++i)
+        if (uv[i].y() > 0) at_rest.position_mm[i] = rest->point(uv[i].x(), uv[i].y());
+      rest->set_fibres(at_rest, uv);
+      mesh.rest_position_mm = std::move(at_rest.position_mm);
+      mesh.rest_fibre = std::move(at_rest.fibre);
     }
     return mesh;
   }
@@ -610,17 +627,23 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   const double x_f = ring_gap ? x_ring : 0.5 * g.valve_gap_mm;
   const double y_end = std::sqrt(r_m * r_m - x_f * x_f);
   const double l_leaf = g.mitral_leaflet_length_mm, l_c = kMitralCoaptationPerLength * l_leaf;
-  auto mitral_lens = [&](double sgn, double z_q) {
+  // open: the rest shape's opening (geometry.mitral_rest_opening_mm, ours): the free edge and the
+  // control points moved towards the leaflet's own annulus by open/2 (1 - s^2).
+  auto mitral_lens = [&](double sgn, double z_q, double open = 0) {
     auto w = [=](double s) -> Vec3 {
       const double y = s * y_end;
       return M + Vec3(sgn * std::sqrt(std::max(0.0, r_m * r_m - y * y)), y, 0);
     };
-    auto f = [=](double s) -> Vec3 { return M + Vec3(sgn * x_f, s * y_end, (z_q + l_c) * (1 - s * s)); };
-    auto q = [=](double s) -> Vec3 { return M + Vec3(sgn * x_f, s * y_end, z_q * (1 - s * s)); };
+    auto f = [=](double s) -> Vec3 {
+      return M + Vec3(sgn * (x_f + 0.5 * open * (1 - s * s)), s * y_end, (z_q + l_c) * (1 - s * s));
+    };
+    auto q = [=](double s) -> Vec3 {
+      return M + Vec3(sgn * (x_f + 0.5 * open * (1 - s * s)), s * y_end, z_q * (1 - s * s));
+    };
     return LensLeaflet{w, f, q, h_ring};
   };
-  auto middle_length = [&](double z_q) {
-    const LensLeaflet lens = mitral_lens(1, z_q);
+  auto middle_length = [&](double z_q, double open = 0) {
+    const LensLeaflet lens = mitral_lens(1, z_q, open);
     return LensLeaflet::length([&](double t) -> Vec3 { return lens.point(0, t); }, 0, 1);
   };
   require(middle_length(0) < l_leaf,
@@ -630,6 +653,16 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   const double z_q = solve_increasing(middle_length, l_leaf, 0, 4 * l_leaf);
   const double z_c = z_q + l_c;
   lay.mitral_coaptation_depth_mm = z_c;
+  // The rest shape (geometry.mitral_rest_opening_mm > 0, ours): the same leaflets opened, the
+  // middle curve kept l long (its control depth re-solved).
+  const double open = g.mitral_rest_opening_mm;
+  require(open >= 0 && x_f + 0.5 * open <= 0.75 * r_m,
+          "geometry.mitral_rest_opening_mm = " + num(open) + " must be in [0, " + num(2 * (0.75 * r_m - x_f)) +
+              "] mm: each rest free edge's middle must stay within 3/4 of the mitral radius (mitral_diameter_mm / 2 = " +
+              num(r_m) + " mm) from the orifice's centre");
+  const double z_q_rest =
+      open > 0 ? solve_increasing([&](double z) { return middle_length(z, open); }, l_leaf, 0, 4 * l_leaf) : z_q;
+  lay.mitral_rest_depth_mm = open > 0 ? z_q_rest + l_c : 0;
   lay.leaflet_gap_mm = 2 * x_f;
   for (int side = 0; side < 2; ++side) {
     const double sgn = side == 0 ? 1.0 : -1.0;  // anterior (+x, towards the aortic valve) / posterior
@@ -647,9 +680,11 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
       attachment.insert(attachment.begin(), {-1.0, M + Vec3(sgn * x_f, -y_end, 0)});
       attachment.emplace_back(1.0, M + Vec3(sgn * x_f, y_end, 0));
     }
+    const LensLeaflet rest = mitral_lens(sgn, z_q_rest, open);
     heart.bodies.push_back(mitral_lens(sgn, z_q).build(side == 0 ? kMitralAnteriorBody : kMitralPosteriorBody,
                                                         Tissue::kMitralLeaflet, g.mitral_leaflet_thickness_mm,
-                                                        kAnchor | kMitralAnnulus, attachment, -Vec3::UnitZ()));
+                                                        kAnchor | kMitralAnnulus, attachment, -Vec3::UnitZ(),
+                                                        open > 0 ? &rest : nullptr));
   }
   // Leaflets must stay inside the LV cavity (checked again on the mesh below).
   {
@@ -657,6 +692,11 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
     require(z_c < depth_limit, "geometry.mitral_leaflet_length_mm = " + num(g.mitral_leaflet_length_mm) +
                                    " reaches " + num(z_c) + " mm below the valvular plane, longer than the LV "
                                    "(lv_long_axis_mm = " + num(L) + ")");
+    require(lay.mitral_rest_depth_mm < depth_limit,
+            "geometry.mitral_rest_opening_mm = " + num(open) + " with mitral_leaflet_length_mm = " +
+                num(g.mitral_leaflet_length_mm) + " puts the leaflets' rest free edge " + num(lay.mitral_rest_depth_mm) +
+                " mm below the valvular plane, deeper than the LV allows (lv_long_axis_mm = " + num(L) + " less " +
+                num(2 * kMinBodyGapMm) + " mm); reduce the opening");
   }
 
   // ---- aortic cusps (closed) ----------------------------------------------------------------
@@ -1023,8 +1063,10 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
                   " for a " + num(kMinBoxClearanceMm) + " mm clearance); enlarge the box or reduce "
                   "geometry.lv_long_axis_mm / lv_short_axis_mm / aortic_*_diameter_mm / la_volume_ml");
   }
-  for (auto& b : heart.bodies)
+  for (auto& b : heart.bodies) {
     for (auto& p : b.position_mm) p += offset;
+    for (auto& p : b.rest_position_mm) p += offset;
+  }
   heart.plane.z_mm += offset.z();
   heart.plane.centre_mm += offset;
   heart.plane.mitral_centre_mm += offset;

@@ -58,6 +58,7 @@ struct HeartLayout {
   double arch_radius_mm = 0;               // centreline radius of the 180-degree arch
   double descending_offset_mm = 0;         // horizontal distance ascending -> descending axis
   double mitral_coaptation_depth_mm = 0;   // depth of the closed mitral free edge
+  double mitral_rest_depth_mm = 0;         // depth of the rest shape's free edge (0: no rest shape)
   double cusp_coaptation_height_mm = 0;    // height of the closed aortic cusp tips
   double leaflet_gap_mm = 0;               // gap between neighbouring leaflets at closure
   double ring_edge_mm = 0;                 // node spacing on the plane and the orifice rings

@@ -58,6 +58,7 @@ nlohmann::json heart_summary(const LeftHeart& heart, const MarkerPlan& plan) {
                  {"arch_radius_mm", l.arch_radius_mm},
                  {"descending_offset_mm", l.descending_offset_mm},
                  {"mitral_coaptation_depth_mm", l.mitral_coaptation_depth_mm},
+                 {"mitral_rest_depth_mm", l.mitral_rest_depth_mm},
                  {"cusp_coaptation_height_mm", l.cusp_coaptation_height_mm},
                  {"leaflet_gap_mm", l.leaflet_gap_mm},
                  {"ring_edge_mm", l.ring_edge_mm},

@@ -103,17 +103,32 @@ void TriMesh::flip_orientation() {
 std::size_t TriMesh::memory_bytes() const {
   return position_mm.capacity() * sizeof(Vec3) + region.capacity() * sizeof(std::uint32_t) +
          tri.capacity() * sizeof(Tri) + tissue.capacity() * sizeof(Tissue) +
-         thickness_mm.capacity() * sizeof(double) + fibre.capacity() * sizeof(Vec3);
+         thickness_mm.capacity() * sizeof(double) + fibre.capacity() * sizeof(Vec3) +
+         rest_position_mm.capacity() * sizeof(Vec3) + rest_fibre.capacity() * sizeof(Vec3);
 }
 
 void TriMesh::check_arrays() const {
   const std::size_t n = position_mm.size(), m = tri.size();
   if (region.size() != n || tissue.size() != m || thickness_mm.size() != m || fibre.size() != m)
     throw std::logic_error("TriMesh '" + name + "': per-node or per-triangle arrays differ in size");
+  if (has_rest_shape() ? (rest_position_mm.size() != n || rest_fibre.size() != m) : !rest_fibre.empty())
+    throw std::logic_error("TriMesh '" + name + "': the rest shape's arrays differ in size from the mesh's");
   for (const auto& t : tri)
     for (auto v : t)
       if (v < 0 || static_cast<std::size_t>(v) >= n)
         throw std::logic_error("TriMesh '" + name + "': node index out of range");
+}
+
+TriMesh rest_shape(const TriMesh& mesh) {
+  mesh.check_arrays();
+  TriMesh rest = mesh;
+  if (mesh.has_rest_shape()) {
+    rest.position_mm = mesh.rest_position_mm;
+    rest.fibre = mesh.rest_fibre;
+  }
+  rest.rest_position_mm.clear();
+  rest.rest_fibre.clear();
+  return rest;
 }
 
 std::vector<Vec3> node_normals(const TriMesh& mesh) {

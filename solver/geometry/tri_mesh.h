@@ -93,6 +93,13 @@ struct TriMesh {
   std::vector<double> thickness_mm;
   std::vector<Vec3> fibre;
 
+  // --- the stress-free (rest) shape, when it differs from the built one above (ours: the mitral
+  // leaflets with geometry.mitral_rest_opening_mm > 0): both empty, or one position per node and
+  // one fibre per triangle, on the same triangles ---
+  std::vector<Vec3> rest_position_mm;
+  std::vector<Vec3> rest_fibre;
+  bool has_rest_shape() const { return !rest_position_mm.empty(); }
+
   std::size_t node_count() const { return position_mm.size(); }
   std::size_t triangle_count() const { return tri.size(); }
 
@@ -113,6 +120,10 @@ struct TriMesh {
   // Throws std::logic_error if the arrays disagree in size or an index is out of range.
   void check_arrays() const;
 };
+
+// The mesh in its stress-free shape: a copy with position_mm = rest_position_mm and fibre =
+// rest_fibre (and no rest arrays); a plain copy when the mesh has no separate rest shape.
+TriMesh rest_shape(const TriMesh& mesh);
 
 // Area-weighted node normals (unit; zero for isolated nodes).
 std::vector<Vec3> node_normals(const TriMesh& mesh);

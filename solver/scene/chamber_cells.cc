@@ -55,4 +55,15 @@ std::vector<char> chamber_cells(const std::vector<geometry::Vec3>& x_mm, const s
   return mask;
 }
 
+std::vector<char> heart_chambers_cells(const std::vector<geometry::Vec3>& lv_x_mm, const std::vector<geometry::Tri>& lv_tri,
+                                       const std::vector<geometry::Vec3>& la_x_mm, const std::vector<geometry::Tri>& la_tri,
+                                       double plane_z_mm, int lv_side, int nx, int ny, int k_begin, int k_count,
+                                       double hx_mm, double hy_mm, double hz_mm) {
+  std::vector<char> in = chamber_cells(lv_x_mm, lv_tri, plane_z_mm, lv_side, nx, ny, k_begin, k_count, hx_mm, hy_mm, hz_mm);
+  const std::vector<char> in_la =
+      chamber_cells(la_x_mm, la_tri, plane_z_mm, -lv_side, nx, ny, k_begin, k_count, hx_mm, hy_mm, hz_mm);
+  for (std::size_t c = 0; c < in.size(); ++c) in[c] = static_cast<char>(in[c] || in_la[c]);
+  return in;
+}
+
 }  // namespace systole::scene

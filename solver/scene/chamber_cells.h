@@ -19,4 +19,11 @@ std::vector<char> chamber_cells(const std::vector<geometry::Vec3>& x_mm, const s
                                 double plane_z_mm, int side, int nx, int ny, int k_begin, int k_count, double hx_mm,
                                 double hy_mm, double hz_mm);
 
+// The cells of either chamber, the LV on side lv_side of the plane and the LA on the other (the
+// union of the two chamber_cells masks, same layout): the cells of the chambers' blood.
+std::vector<char> heart_chambers_cells(const std::vector<geometry::Vec3>& lv_x_mm, const std::vector<geometry::Tri>& lv_tri,
+                                       const std::vector<geometry::Vec3>& la_x_mm, const std::vector<geometry::Tri>& la_tri,
+                                       double plane_z_mm, int lv_side, int nx, int ny, int k_begin, int k_count,
+                                       double hx_mm, double hy_mm, double hz_mm);
+
 }  // namespace systole::scene

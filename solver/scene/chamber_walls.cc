@@ -1,5 +1,7 @@
 #include "solver/scene/chamber_walls.h"
 
+#include "solver/core/errors.h"
+
 namespace systole::scene {
 
 structure::ShellMaterials chamber_wall_materials(const config::Scenario& s) {
@@ -36,6 +38,20 @@ structure::ShellOptions chamber_wall_options(const config::Scenario& s, double p
   o.active_min_fibre_stretch = s.tissue.active_min_fibre_stretch;
   o.active_cross_fibre_fraction = s.tissue.active_cross_fibre_fraction;
   return o;
+}
+
+structure::ShellModel body_shell(const geometry::TriMesh& built, const structure::ShellMaterials& materials,
+                                 const structure::ShellOptions& options) {
+  structure::ShellModel shell(geometry::rest_shape(built), materials, options);
+  if (built.has_rest_shape()) {
+    shell.set_state(built.position_mm, std::vector<structure::Vec3>(built.node_count(), structure::Vec3::Zero()));
+    const double pre = shell.max_abs_strain();
+    if (!(pre < options.strain_limit))
+      throw InputError("body '" + built.name + "' starts pre-strained to |edge strain| " + std::to_string(pre) +
+                       " at its built shape, beyond structure.strain_limit = " + std::to_string(options.strain_limit) +
+                       ": reduce its rest shape's departure (geometry.mitral_rest_opening_mm)");
+  }
+  return shell;
 }
 
 void clear_passive_annulus(const geometry::TriMesh& mesh, double distance_mm, std::vector<std::int32_t>& ep_node) {

@@ -22,6 +22,14 @@ structure::ShellOptions chamber_wall_options(const config::Scenario& scenario, d
 // The structure.* options for the other bodies (leaflets, aorta), cavity closed at plane_z_mm.
 structure::ShellOptions structure_options(const config::Scenario& scenario, double plane_z_mm);
 
+// The shell of one heart body: built on its stress-free shape (geometry::rest_shape) and, when the
+// mesh was built in another shape (the mitral leaflets with geometry.mitral_rest_opening_mm > 0),
+// started at rest at the built positions (pre-strained, ours). Throws what ShellModel throws, and
+// InputError when the built shape's largest edge strain from the rest shape is not below
+// options.strain_limit (the run would stop at its first step).
+structure::ShellModel body_shell(const geometry::TriMesh& built, const structure::ShellMaterials& materials,
+                                 const structure::ShellOptions& options);
+
 // Sets ep_node[i] = -1 (no active tension) for the nodes within distance_mm (stress-free
 // positions) of the mesh's anchor ring: the fibrous annulus is not muscle (ours). No-op for
 // distance_mm <= 0.

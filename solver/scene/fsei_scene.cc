@@ -32,10 +32,10 @@
 #include "solver/geometry/tri_mesh.h"
 #include "solver/ibm/mls.h"
 #include "solver/lumped/activation.h"
+#include "solver/scene/chamber_cells.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/electro_scene.h"
 #include "solver/scene/fsei_checkpoint.h"
-#include "solver/scene/chamber_cells.h"
 #include "solver/scene/fsei_fields.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/structure/contact.h"
@@ -568,12 +568,14 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   std::vector<structure::ShellModel> models;
   for (auto name : deformable) {
     const bool chamber = name == geometry::kLvBody || name == geometry::kLaBody;
-    models.emplace_back(heart.body(name), materials, chamber ? wall : other);
+    // (a mitral leaflet with a rest opening starts pre-strained at its built, closed shape)
+    models.push_back(body_shell(heart.body(name), materials, chamber ? wall : other));
     const bool mitral = name == geometry::kMitralAnteriorBody || name == geometry::kMitralPosteriorBody;
-    // The seed's limiter (no chordae): towards the atrium, -z; it holds over the phases
-    // [0, structure.mitral_limiter_end_phase) of every beat (set_mitral_limiter below; the seed's
-    // in systole only, ours by default all the time).
-    if (mitral && s.structure.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
+    // The seed's limiter (no chordae): towards the atrium, -z, from the built (closed) valve; it
+    // holds over the phases [0, structure.mitral_limiter_end_phase) of every beat
+    // (set_mitral_limiter below; the seed's in systole only, ours by default all the time).
+    if (mitral && s.structure.mitral_limiter)
+      models.back().set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm, heart.body(name).position_mm);
     // The open cusps kept off the sinus wall (structure.aortic_cusp_radius_limit, ours).
     const bool cusp = std::find(std::begin(geometry::kAorticCuspBodies), std::end(geometry::kAorticCuspBodies), name) !=
                       std::end(geometry::kAorticCuspBodies);
@@ -1138,19 +1140,17 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       const grid::Slabs& sl = fluid.slabs();
       const grid::Grid& gg = sl.grid();
       const int kb = sl.k_begin(), kc = sl.k_count();
-      auto cells = [&](std::size_t body, int side) {
-        return chamber_cells(group.body(body).positions_mm(), group.body(body).stress_free_mesh().tri,
-                             heart.plane.z_mm, side, gg.nx(), gg.ny(), kb, kc, gg.dx() * kDmMm, gg.dy() * kDmMm,
-                             gg.dz() * kDmMm);
-      };
-      const std::vector<char> in_lv = cells(kLv, lv_side), in_la = cells(kLa, -lv_side);
+      const std::vector<char> in_heart =
+          heart_chambers_cells(group.body(kLv).positions_mm(), group.body(kLv).stress_free_mesh().tri,
+                               group.body(kLa).positions_mm(), group.body(kLa).stress_free_mesh().tri, heart.plane.z_mm,
+                               lv_side, gg.nx(), gg.ny(), kb, kc, gg.dx() * kDmMm, gg.dy() * kDmMm, gg.dz() * kDmMm);
       const fluid::Velocity& u = fluid.velocity();
       double sum = 0;  // Σ |u|² over the chambers' cells, the fluid's own per-cell reading (its faces at (i, j, k))
       for (int k = 0; k < kc; ++k)
         for (int j = 0; j < gg.ny(); ++j)
           for (int i = 0; i < gg.nx(); ++i) {
             const std::size_t c = (static_cast<std::size_t>(k) * gg.ny() + j) * gg.nx() + i;
-            if (in_lv[c] || in_la[c]) sum += u.u(i, j, k) * u.u(i, j, k) + u.v(i, j, k) * u.v(i, j, k) + u.w(i, j, k) * u.w(i, j, k);
+            if (in_heart[c]) sum += u.u(i, j, k) * u.u(i, j, k) + u.v(i, j, k) * u.v(i, j, k) + u.w(i, j, k) * u.w(i, j, k);
           }
       MPI_Allreduce(MPI_IN_PLACE, &sum, 1, MPI_DOUBLE, MPI_SUM, sl.comm());
       ke_heart.push_back(0.5 * sum / static_cast<double>(gg.cells()) * kinetic_mj_per_unit);  // as ke: a box mean × the box
@@ -1240,14 +1240,14 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
         continue;
       }
       const std::vector<Vec3>& x = leaflet.positions_mm();
-      const std::vector<Vec3>& x0 = leaflet.stress_free_mesh().position_mm;
+      const std::vector<Vec3>& x0 = heart.body(name).position_mm;  // the built, closed valve
       for (std::size_t i = 0; i < x.size(); ++i) {
         const double beyond = (x0[i] - x[i]).z() - s.structure.mitral_limit_mm;  // towards the LA, -z
         if (beyond > limiter_engage_worst_mm)
           limiter_engage_worst_mm = beyond, limiter_engage_worst_t = t,
           limiter_engage_worst_node = std::string(name) + "' node " + std::to_string(i);
       }
-      leaflet.set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm);
+      leaflet.set_displacement_limit(-Vec3::UnitZ(), s.structure.mitral_limit_mm, x0);
     }
     if (mitral_limiter_on) ++limiter_engagements;
   };

@@ -34,6 +34,7 @@ using structure::BodyGroup;
 struct Bodies {
   std::unique_ptr<BodyGroup> group;
   std::vector<double> volume0_mm3;
+  std::vector<std::vector<Vec3>> built_mm;  // per body, its initial (built) positions
   std::size_t size() const { return group->body_count(); }
   const ShellModel& operator[](std::size_t k) const { return group->body(k); }
   ShellModel& operator[](std::size_t k) { return group->body(k); }
@@ -66,8 +67,9 @@ Bodies build_bodies(const config::Scenario& s) {
     if (st.body == "mitral_leaflets") {
       // Anchored at the annulus (the geometry tags it); the LV is on the +z side of the plane.
       for (auto name : {geometry::kMitralAnteriorBody, geometry::kMitralPosteriorBody}) {
-        models.emplace_back(heart.body(name), mat, opt);
-        if (st.mitral_limiter) models.back().set_displacement_limit(-Vec3::UnitZ(), st.mitral_limit_mm);
+        models.push_back(scene::body_shell(heart.body(name), mat, opt));  // pre-strained if it has a rest shape
+        if (st.mitral_limiter)  // from the built, closed valve
+          models.back().set_displacement_limit(-Vec3::UnitZ(), st.mitral_limit_mm, heart.body(name).position_mm);
       }
     } else {
       models.emplace_back(heart.body(geometry::kLvBody), mat, opt);
@@ -82,7 +84,10 @@ Bodies build_bodies(const config::Scenario& s) {
   copt.skin_mm = 0.5 * st.contact_distance_mm;
   Bodies bodies;
   bodies.group = std::make_unique<BodyGroup>(std::move(models), copt);
-  for (std::size_t k = 0; k < bodies.size(); ++k) bodies.volume0_mm3.push_back(bodies[k].cavity_volume_mm3());
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    bodies.volume0_mm3.push_back(bodies[k].cavity_volume_mm3());
+    bodies.built_mm.push_back(bodies[k].positions_mm());
+  }
   return bodies;
 }
 
@@ -310,11 +315,12 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
     }
   }
   if (st.body == "mitral_leaflets") {
-    // Largest displacement of a leaflet node towards the LA (-z), to compare with the limiter.
+    // Largest displacement of a leaflet node towards the LA (-z) from the built valve, to compare
+    // with the limiter.
     double towards_la = 0;
     for (std::size_t k = 0; k < bodies.size(); ++k)
       for (std::size_t i = 0; i < bodies[k].node_count(); ++i)
-        towards_la = std::max(towards_la, bodies[k].stress_free_mesh().position_mm[i].z() - bodies[k].positions_mm()[i].z());
+        towards_la = std::max(towards_la, bodies.built_mm[k][i].z() - bodies[k].positions_mm()[i].z());
     m["leaflet_displacement_towards_la_mm"] = towards_la;
   }
   if (scenario.outputs.time_series) result.series = std::move(series);

@@ -28,9 +28,10 @@ structure::BodyGroup make_group(const config::Scenario& s, const geometry::LeftH
   o.damping_per_ms = damping_per_ms;
   std::vector<structure::ShellModel> models;
   for (auto n : names) {
-    models.emplace_back(heart.body(n), materials, o);
-    if (valve == Valve::kMitral && s.structure.mitral_limiter)
-      models.back().set_displacement_limit(-geometry::Vec3::UnitZ(), s.structure.mitral_limit_mm);
+    models.push_back(body_shell(heart.body(n), materials, o));  // pre-strained if it has a rest shape
+    if (valve == Valve::kMitral && s.structure.mitral_limiter)  // from the built, closed valve
+      models.back().set_displacement_limit(-geometry::Vec3::UnitZ(), s.structure.mitral_limit_mm,
+                                           heart.body(n).position_mm);
   }
   structure::ContactOptions c;
   c.enabled = s.structure.contact;

@@ -142,6 +142,10 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
   } catch (const std::exception& e) {
     throw InputError(body + ": inconsistent mesh arrays: " + e.what());
   }
+  if (mesh_.has_rest_shape())
+    throw InputError(body + ": the mesh is built in another shape than its stress-free one (rest_position_mm "
+                     "set); build the shell on geometry::rest_shape(mesh) and start it at the built positions "
+                     "(scene::body_shell)");
   if (!(options.time_step_safety > 0 && options.time_step_safety <= 1))
     throw InputError(body + ": time_step_safety = " + fmt(options.time_step_safety) + " must be in (0, 1]");
   if (!(options.strain_limit > 0 && options.strain_limit < 1))
@@ -352,11 +356,20 @@ void ShellModel::move_fixed_nodes(const Eigen::Matrix3d& rotation, const Vec3& t
 }
 
 void ShellModel::set_displacement_limit(const Vec3& axis, double max_mm) {
+  set_displacement_limit(axis, max_mm, mesh_.position_mm);
+}
+
+void ShellModel::set_displacement_limit(const Vec3& axis, double max_mm, std::vector<Vec3> reference_mm) {
   if (!(axis.norm() > 0) || !(max_mm >= 0))
     throw InputError("body '" + name_ + "': displacement limit needs a non-zero axis and max_mm >= 0");
+  if (reference_mm.size() != node_count())
+    throw InputError("body '" + name_ + "': the displacement limit's reference has " +
+                     std::to_string(reference_mm.size()) + " positions, the body " + std::to_string(node_count()) +
+                     " nodes");
   limit_on_ = true;
   limit_axis_ = axis.normalized();
   limit_mm_ = max_mm;
+  limit_reference_mm_ = std::move(reference_mm);
 }
 
 void ShellModel::set_radial_limit(const Vec3& axis_point_mm, const Vec3& axis_direction, double radius_mm) {
@@ -736,7 +749,7 @@ void ShellModel::begin_substep(double dt) {
   if (limit_on_) {
     for (std::size_t i = 0; i < n; ++i) {
       if (fixed_[i]) continue;
-      const double d = (x_[i] - mesh_.position_mm[i]).dot(limit_axis_);
+      const double d = (x_[i] - limit_reference_mm_[i]).dot(limit_axis_);
       if (d <= limit_mm_) continue;
       x_[i] -= (d - limit_mm_) * limit_axis_;
       const double vn = v_[i].dot(limit_axis_);

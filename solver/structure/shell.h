@@ -119,7 +119,9 @@ class ShellModel {
  public:
   // Builds masses, springs, hinges and active triangles from the stress-free mesh. Throws
   // InputError (naming the body and the item) for a negative or zero thickness, stiffness or
-  // density, a zero-area triangle, a zero-length edge, an unknown law, or a bad option.
+  // density, a zero-area triangle, a zero-length edge, an unknown law, a bad option, or a mesh
+  // that carries a separate rest shape (TriMesh::rest_position_mm: build on
+  // geometry::rest_shape(mesh) instead, so that no rest shape is silently ignored).
   ShellModel(const geometry::TriMesh& stress_free, const ShellMaterials& materials,
              const ShellOptions& options);
 
@@ -142,6 +144,14 @@ class ShellModel {
   // axis = -z, towards the atrium, during systole). Applied after every drift: the excess is
   // projected away and the velocity component along axis, if outward, removed (inelastic, ours).
   void set_displacement_limit(const Vec3& axis, double max_mm);
+  // The same, measured from `reference_mm` (one position per node) instead of the stress-free
+  // positions: a body built in another shape than its stress-free one (the mitral leaflets built
+  // closed over an open rest shape, geometry.mitral_rest_opening_mm, ours) keeps the seed's
+  // limit on its displacement from the built, closed valve. Throws InputError on a wrong size.
+  void set_displacement_limit(const Vec3& axis, double max_mm, std::vector<Vec3> reference_mm);
+  // The positions the displacement limit measures from: empty until a limit is set, then the
+  // given reference or the stress-free positions.
+  const std::vector<Vec3>& displacement_limit_reference_mm() const { return limit_reference_mm_; }
   void clear_displacement_limit() { limit_on_ = false; }
   // A radial limiter (ours; the aortic cusps): every free node stays within
   // max(radius_mm, its stress-free distance) of the line through axis_point_mm along
@@ -289,6 +299,7 @@ class ShellModel {
   bool limit_on_ = false;
   Vec3 limit_axis_ = Vec3::UnitZ();
   double limit_mm_ = 0;
+  std::vector<Vec3> limit_reference_mm_;  // per node; the stress-free positions unless set
   bool radial_on_ = false;
   Vec3 radial_point_mm_ = Vec3::Zero(), radial_axis_ = Vec3::UnitZ();
   std::vector<double> radial_max_mm_;  // per node

@@ -343,6 +343,11 @@ TEST(ChamberCells, TheLvsAndTheLasCellsFillTheirCavities) {
   std::vector<char> joined(low);
   joined.insert(joined.end(), high.begin(), high.end());
   EXPECT_EQ(joined, in_lv);
+  // the union helper of the scene's sampling: either chamber's cells
+  const std::vector<char> in_heart =
+      heart_chambers_cells(lv.position_mm, lv.tri, la.position_mm, la.tri, heart.plane.z_mm, lv_side, nx, ny, 0, nz, h, h, h);
+  ASSERT_EQ(in_heart.size(), in_lv.size());
+  for (std::size_t c = 0; c < in_heart.size(); ++c) EXPECT_EQ(in_heart[c] != 0, in_lv[c] || in_la[c]) << c;
   EXPECT_THROW(chamber_cells(lv.position_mm, lv.tri, heart.plane.z_mm, 0, nx, ny, 0, nz, h, h, h), std::invalid_argument);
 }
 

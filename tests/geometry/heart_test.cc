@@ -265,6 +265,71 @@ TEST(Heart, ValveGapIsTheParameter) {
   }
 }
 
+// geometry.mitral_rest_opening_mm (ours): the mitral leaflets are built closed as before (the same
+// nodes and triangles as without a rest shape) over a rest shape whose free edges' middles lie
+// valve_gap + opening apart; the attachment does not move, every free-edge node moves outward (away
+// from the other leaflet) and none moves across the orifice's centre line; the rest fibres are unit
+// tangents of the rest triangles; the rest free edge lies deeper (the same leaflet length over a
+// shorter span). 0 gives no rest shape; an opening beyond 3/4 of the mitral radius is refused.
+TEST(Heart, TheMitralLeafletsRestOpenAndAreBuiltClosed) {
+  auto s = defaults();
+  s.geometry.valve_gap_mm = 1;
+  const LeftHeart closed = build(s);
+  EXPECT_FALSE(closed.body(kMitralAnteriorBody).has_rest_shape());
+  EXPECT_EQ(closed.layout.mitral_rest_depth_mm, 0);
+  const double opening = 8;
+  s.geometry.mitral_rest_opening_mm = opening;
+  const LeftHeart heart = build(s);
+  const Vec3 M = heart.plane.mitral_centre_mm;
+  auto middle_free_edge_x = [&](const TriMesh& m, bool rest) {
+    const auto& x = rest ? m.rest_position_mm : m.position_mm;
+    double best_dy = 1e300, at = 0;
+    for (std::size_t i = 0; i < m.node_count(); ++i)
+      if ((m.region[i] & kFreeEdge) && std::abs(x[i].y() - M.y()) < best_dy) best_dy = std::abs(x[i].y() - M.y()), at = x[i].x();
+    EXPECT_LT(best_dy, 1e-9);  // a free-edge node sits at the middle (s = 0)
+    return at;
+  };
+  const TriMesh& a = heart.body(kMitralAnteriorBody);
+  const TriMesh& p = heart.body(kMitralPosteriorBody);
+  for (const TriMesh* m : {&a, &p}) {
+    const TriMesh& before = closed.body(m->name);
+    ASSERT_TRUE(m->has_rest_shape()) << m->name;
+    EXPECT_NO_THROW(m->check_arrays());
+    ASSERT_EQ(m->node_count(), before.node_count());
+    ASSERT_EQ(m->tri, before.tri);
+    const double side = m == &a ? 1.0 : -1.0;  // anterior at +x
+    for (std::size_t i = 0; i < m->node_count(); ++i) {
+      EXPECT_LT((m->position_mm[i] - before.position_mm[i]).norm(), 1e-9) << m->name << " node " << i;
+      const Vec3 moved = m->rest_position_mm[i] - m->position_mm[i];
+      if (m->region[i] & kAnchor) EXPECT_LT(moved.norm(), 1e-12) << m->name << " node " << i;
+      if (m->region[i] & kFreeEdge) EXPECT_GE(side * moved.x(), 0) << m->name << " node " << i;
+      EXPECT_GT(side * (m->rest_position_mm[i].x() - M.x()), 0) << m->name << " node " << i;
+    }
+    const TriMesh rest = rest_shape(*m);
+    EXPECT_FALSE(rest.has_rest_shape());
+    for (std::size_t t = 0; t < rest.triangle_count(); ++t) {
+      EXPECT_NEAR(rest.fibre[t].norm(), 1, 1e-9);
+      EXPECT_LT(std::abs(rest.fibre[t].dot(rest.unit_normal(t))), 1e-9);
+    }
+  }
+  const double built_gap = middle_free_edge_x(a, false) - middle_free_edge_x(p, false);
+  const double rest_gap = middle_free_edge_x(a, true) - middle_free_edge_x(p, true);
+  std::printf("  mitral free edges' middles: built %.3f mm apart, rest %.3f mm (opening %.1f mm); rest depth %.2f mm, "
+              "closed %.2f mm\n", built_gap, rest_gap, opening, heart.layout.mitral_rest_depth_mm,
+              heart.layout.mitral_coaptation_depth_mm);
+  EXPECT_NEAR(built_gap, 1, 1e-9);
+  EXPECT_NEAR(rest_gap, 1 + opening, 1e-9);
+  EXPECT_GT(heart.layout.mitral_rest_depth_mm, heart.layout.mitral_coaptation_depth_mm);
+  s.geometry.mitral_rest_opening_mm = 20;
+  try {
+    build(s);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("geometry.mitral_rest_opening_mm = 20"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("3/4 of the mitral radius"), std::string::npos) << e.what();
+  }
+}
+
 // Helix angle measured on the mesh in an independent frame: e_c = the horizontal direction
 // counter-clockwise about +z, e_l = the projection of -z (towards the base), both in the
 // triangle plane; angle = atan2(f.e_l, f.e_c).

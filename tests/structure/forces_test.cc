@@ -407,6 +407,42 @@ TEST(StructureConstraints, DisplacementLimiterHoldsTheLeaflet) {
             << deepest(limited) << " mm\n";
 }
 
+// The limiter measured from a given reference (a body built in another shape than its stress-free
+// one, ours): the same sheet, built 0.3 mm below its stress-free plane and started there, may move
+// 0.5 mm further down from the built shape (0.8 from the stress-free one) and no further; a wrong-
+// sized reference is refused, and without one the limiter measures from the stress-free positions.
+TEST(StructureConstraints, DisplacementLimiterMeasuresFromItsReference) {
+  auto sheet = flat_sheet(11, 11, 1.0, 0.5, geometry::Tissue::kMitralLeaflet, {1, 0, 0});
+  const double ymax = 10 * std::sqrt(3.0) / 2;
+  std::vector<Vec3> built = sheet.position_mm;
+  for (std::size_t i = 0; i < sheet.node_count(); ++i) {
+    const Vec3& p = sheet.position_mm[i];
+    if (p.x() < 0.6 || p.x() > 9.4 || p.y() < 0.1 || p.y() > ymax - 0.1) sheet.region[i] |= geometry::kAnchor;
+    else built[i].z() -= 0.3;
+  }
+  ShellOptions opt;
+  opt.damping_per_ms = 0.3;
+  ShellModel body(sheet, seed_materials(), opt);
+  EXPECT_EQ(body.displacement_limit_reference_mm().size(), 0u);
+  body.set_displacement_limit(-Vec3::UnitZ(), 0.5);
+  ASSERT_EQ(body.displacement_limit_reference_mm().size(), sheet.node_count());
+  EXPECT_EQ(body.displacement_limit_reference_mm()[7], sheet.position_mm[7]);
+  EXPECT_THROW(body.set_displacement_limit(-Vec3::UnitZ(), 0.5, std::vector<Vec3>(3, Vec3::Zero())), InputError);
+  body.set_state(built, std::vector<Vec3>(sheet.node_count(), Vec3::Zero()));
+  body.set_displacement_limit(-Vec3::UnitZ(), 0.5, built);
+  body.set_cavity_pressure(0.02);  // normals +z: pushes towards -z
+  body.advance(100);
+  double deepest = 0, beyond_built = -1e300;
+  for (std::size_t i = 0; i < sheet.node_count(); ++i) {
+    deepest = std::min(deepest, body.positions_mm()[i].z());
+    beyond_built = std::max(beyond_built, built[i].z() - body.positions_mm()[i].z());
+  }
+  EXPECT_LE(beyond_built, 0.5 + 1e-12);
+  EXPECT_GE(deepest, -0.8 - 1e-12);
+  EXPECT_LT(deepest, -0.79);  // it reaches the limit, 0.8 mm below the stress-free plane
+  std::cout << "  deepest node under load, limit 0.5 mm from a shape built 0.3 mm down: " << deepest << " mm\n";
+}
+
 // The aortic cusps' radial limiter (ours): a pressurised sphere inflates beyond 1.05 of its
 // radius from its z axis when free, and stays within that cylinder with the limiter; nodes that
 // start outside the limit (none here) would keep their stress-free distance instead.

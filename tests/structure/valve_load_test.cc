@@ -6,11 +6,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <stdexcept>
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
+#include "solver/geometry/left_heart.h"
+#include "solver/scene/chamber_walls.h"
 #include "solver/scene/valve_load.h"
+#include "solver/structure/shell.h"
 
 namespace systole {
 namespace {
@@ -84,9 +88,12 @@ TEST(ClosedValveLoad, MitralValveCarriesTheSystolicPeak) {
 // (ClosedValveLoad::mitral_free_edge_gap_mm) after `ms` of the pressure difference p_mmhg,
 // ramped over 10 ms; negative p opens the valve. The leaflets' c is `c_pa`; gap 1 mm, density
 // 3 g/ml and the area floor 0.5 as in the heart runs.
-double mitral_gap_mm(double c_pa, double p_mmhg, int ms, double* max_strain = nullptr) {
+// rest_opening_mm: geometry.mitral_rest_opening_mm (0: leaflets stress-free closed).
+double mitral_gap_mm(double c_pa, double p_mmhg, int ms, double* max_strain = nullptr, double rest_opening_mm = 0,
+                     double* min_strain = nullptr) {
   config::Scenario s = config::parse_scenario(nlohmann::json::object());
   s.tissue.mitral_leaflets.fung_c_pa = c_pa;
+  s.geometry.mitral_rest_opening_mm = rest_opening_mm;
   s.geometry.valve_gap_mm = 1;  // the heart runs' setting (docs/fsei.md, sessions 15-17)
   s.tissue.density_g_per_ml = 3;
   s.structure.area_floor = 0.5;
@@ -94,6 +101,7 @@ double mitral_gap_mm(double c_pa, double p_mmhg, int ms, double* max_strain = nu
   scene::ValveLoadSample last;
   for (int t = 1; t <= ms; ++t) last = load.advance(1.0, p_mmhg * std::min(1.0, t / 10.0));
   if (max_strain) *max_strain = last.max_strain;
+  if (min_strain) *min_strain = last.min_strain;
   return load.mitral_free_edge_gap_mm();
 }
 
@@ -113,6 +121,51 @@ TEST(ClosedValveLoad, TheMitralValveOpensUnderTheLAsPressureTheWiderTheSofter) {
   double strain = 0;
   mitral_gap_mm(1851, 120, 30, &strain);
   EXPECT_LT(strain, 0.45);
+}
+
+// geometry.mitral_rest_opening_mm (ours): leaflets built closed over a rest shape opened by 6 mm
+// start pre-strained; at the small LA-LV difference of a filling (3 mmHg) they part by 3 mm more
+// than the stress-free closed leaflets (11.5 mm against 5.8 measured), yet 10 mmHg from the LV
+// closes them (free edges within 1.5 mm; 0.56 measured) and they hold the systolic peak, 120 mmHg,
+// with no edge strained beyond +-0.4 (docs/fsei.md, session 35).
+TEST(ClosedValveLoad, AMitralRestOpeningOpensTheValveWiderAndItStillCloses) {
+  const double closed_rest = mitral_gap_mm(3702, -3, 60);
+  const double open_rest = mitral_gap_mm(3702, -3, 60, nullptr, 6);
+  std::cout << "  mitral gap at -3 mmHg: stress-free closed " << closed_rest << " mm, rest opening 6 mm " << open_rest << " mm\n";
+  EXPECT_GT(open_rest, closed_rest + 3.0);
+  const double shut = mitral_gap_mm(3702, 10, 40, nullptr, 6);
+  std::cout << "  at +10 mmHg: " << shut << " mm\n";
+  EXPECT_LT(shut, 1.5);
+  double max_strain = 0, min_strain = 0;
+  mitral_gap_mm(3702, 120, 30, &max_strain, 6, &min_strain);
+  std::cout << "  at 120 mmHg: edge strains " << min_strain << " .. " << max_strain << "\n";
+  EXPECT_LT(max_strain, 0.4);
+  EXPECT_GT(min_strain, -0.4);
+}
+
+// A heart body built in another shape than its stress-free one cannot become a shell directly:
+// ShellModel refuses it (no rest shape silently ignored); scene::body_shell builds it on its rest
+// shape, started at the built positions.
+TEST(ClosedValveLoad, AShellRefusesAMeshWithASeparateRestShape) {
+  config::Scenario s = config::parse_scenario(nlohmann::json::object());
+  s.geometry.mitral_rest_opening_mm = 6;
+  const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
+  const geometry::TriMesh& leaflet = heart.body(geometry::kMitralAnteriorBody);
+  const structure::ShellMaterials m = scene::chamber_wall_materials(s);
+  const structure::ShellOptions o = scene::structure_options(s, heart.plane.z_mm);
+  try {
+    structure::ShellModel direct(leaflet, m, o);
+    FAIL() << "a mesh with a rest shape was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rest_shape"), std::string::npos) << e.what();
+  }
+  const structure::ShellModel shell = scene::body_shell(leaflet, m, o);
+  ASSERT_EQ(shell.node_count(), leaflet.node_count());
+  for (std::size_t i = 0; i < leaflet.node_count(); ++i) {
+    EXPECT_EQ(shell.positions_mm()[i], leaflet.position_mm[i]);
+    EXPECT_EQ(shell.stress_free_mesh().position_mm[i], leaflet.rest_position_mm[i]);
+  }
+  EXPECT_GT(shell.max_abs_strain(), 0.01);  // pre-strained
 }
 
 TEST(ClosedValveLoad, BadArgumentsAreRejected) {
