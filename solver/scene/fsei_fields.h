@@ -20,7 +20,8 @@
 //   fsei_wss_phase.h5   (write_wss_phase_average, at the end of a run of two or more beats) the
 //   + .xmf              wall shear stress phase-averaged over the beats after the first, per body
 //                       and phase bin j: /<body>/positions_mm and /<body>/triangles (the
-//                       stress-free mesh), /<body>/bin_<j>/wss_mean_pa and wss_rms_pa (per node,
+//                       stress-free mesh: the mitral leaflets open by geometry.mitral_rest_opening_mm
+//                       when it is > 0), /<body>/bin_<j>/wss_mean_pa and wss_rms_pa (per node,
 //                       Pa), /phase (bin centres, t/T) and /beats (beats averaged per bin).
 // Contract: construct on every rank with the same arguments; frame() is collective when it
 // writes the fluid; bodies_frame() is rank 0's alone (no communication: usable after a
