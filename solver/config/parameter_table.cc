@@ -504,6 +504,13 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(structure.contact_stiffness_kpa_per_mm, "kPa/mm", 40, 0, 1e5,
                            "Contact penalty kappa: pressure kappa (d_c - gap) on a node inside the layer (enters the "
                            "stable step)."));
+  t.push_back(SYSTOLE_REAL(structure.contact_damping_ratio, "", 0, 0, 2,
+                           "Penalty contact, the viscous layer (ours): inside the contact layer a dashpot on the "
+                           "relative velocity of a node and the surface point it touches, this fraction of the "
+                           "critical damping of the pair's penalty spring (2 zeta sqrt(k mu), mu the pair's reduced "
+                           "mass); its normal part never turns the push into a pull, its tangential part resists "
+                           "sliding. Stills the chatter of closed valves pressed together (docs/fsei.md, session "
+                           "36); shortens the contact's stable step by sqrt(1 + zeta^2) - zeta. 0: none."));
   t.push_back(SYSTOLE_BOOL(structure.mitral_limiter, true,
                            "Body 'mitral_leaflets': the seed's limiter of the leaflets' displacement towards the LA "
                            "(no chordae)."));

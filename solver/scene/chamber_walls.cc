@@ -31,6 +31,18 @@ structure::ShellOptions structure_options(const config::Scenario& s, double plan
   return o;
 }
 
+structure::ContactOptions contact_options(const config::Scenario& s) {
+  structure::ContactOptions c;
+  c.enabled = s.structure.contact;
+  c.rule = s.structure.contact_rule == "cell_average" ? structure::ContactRule::kCellAverage
+                                                      : structure::ContactRule::kPenalty;
+  c.distance_mm = s.structure.contact_distance_mm;
+  c.stiffness_kpa_per_mm = s.structure.contact_stiffness_kpa_per_mm;
+  c.damping_ratio = s.structure.contact_damping_ratio;
+  c.skin_mm = 0.5 * s.structure.contact_distance_mm;
+  return c;
+}
+
 structure::ShellOptions chamber_wall_options(const config::Scenario& s, double plane_z_mm) {
   structure::ShellOptions o = structure_options(s, plane_z_mm);
   o.law = s.electromechanics.spring_law;

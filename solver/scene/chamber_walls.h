@@ -7,6 +7,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/geometry/tri_mesh.h"
+#include "solver/structure/contact.h"
 #include "solver/structure/shell.h"
 
 namespace systole::scene {
@@ -21,6 +22,10 @@ structure::ShellOptions chamber_wall_options(const config::Scenario& scenario, d
 
 // The structure.* options for the other bodies (leaflets, aorta), cavity closed at plane_z_mm.
 structure::ShellOptions structure_options(const config::Scenario& scenario, double plane_z_mm);
+
+// The contact between the bodies from structure.* (contact, contact_rule, contact_distance_mm,
+// contact_stiffness_kpa_per_mm, contact_damping_ratio), the Verlet skin half the layer.
+structure::ContactOptions contact_options(const config::Scenario& scenario);
 
 // The shell of one heart body: built on its stress-free shape (geometry::rest_shape) and, when the
 // mesh was built in another shape (the mitral leaflets with geometry.mitral_rest_opening_mm > 0),

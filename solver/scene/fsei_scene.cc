@@ -592,14 +592,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       models.back().fix_nodes(outlet);
     }
   }
-  structure::ContactOptions contact;
-  contact.enabled = s.structure.contact;
-  contact.rule = s.structure.contact_rule == "cell_average" ? structure::ContactRule::kCellAverage
-                                                            : structure::ContactRule::kPenalty;
-  contact.distance_mm = s.structure.contact_distance_mm;
-  contact.stiffness_kpa_per_mm = s.structure.contact_stiffness_kpa_per_mm;
-  contact.skin_mm = 0.5 * s.structure.contact_distance_mm;
-  structure::BodyGroup group(std::move(models), contact);
+  structure::BodyGroup group(std::move(models), contact_options(s));
   constexpr std::size_t kLv = 0, kLa = 1;
   const auto kAorta = static_cast<std::size_t>(
       std::find(deformable.begin(), deformable.end(), geometry::kAortaBody) - deformable.begin());

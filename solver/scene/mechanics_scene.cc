@@ -76,14 +76,8 @@ Bodies build_bodies(const config::Scenario& s) {
       if (st.body == "left_heart") models.emplace_back(heart.body(geometry::kLaBody), mat, opt);
     }
   }
-  structure::ContactOptions copt;
-  copt.enabled = st.contact;
-  copt.rule = st.contact_rule == "cell_average" ? structure::ContactRule::kCellAverage : structure::ContactRule::kPenalty;
-  copt.distance_mm = st.contact_distance_mm;
-  copt.stiffness_kpa_per_mm = st.contact_stiffness_kpa_per_mm;
-  copt.skin_mm = 0.5 * st.contact_distance_mm;
   Bodies bodies;
-  bodies.group = std::make_unique<BodyGroup>(std::move(models), copt);
+  bodies.group = std::make_unique<BodyGroup>(std::move(models), scene::contact_options(s));
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     bodies.volume0_mm3.push_back(bodies[k].cavity_volume_mm3());
     bodies.built_mm.push_back(bodies[k].positions_mm());

@@ -33,12 +33,7 @@ structure::BodyGroup make_group(const config::Scenario& s, const geometry::LeftH
       models.back().set_displacement_limit(-geometry::Vec3::UnitZ(), s.structure.mitral_limit_mm,
                                            heart.body(n).position_mm);
   }
-  structure::ContactOptions c;
-  c.enabled = s.structure.contact;
-  c.distance_mm = s.structure.contact_distance_mm;
-  c.stiffness_kpa_per_mm = s.structure.contact_stiffness_kpa_per_mm;
-  c.skin_mm = 0.5 * c.distance_mm;
-  return structure::BodyGroup(std::move(models), c);
+  return structure::BodyGroup(std::move(models), contact_options(s));
 }
 
 }  // namespace
@@ -74,6 +69,7 @@ ValveLoadSample ClosedValveLoad::sample(double pressure_mmhg) const {
     const auto& x = group_.body(k).positions_mm();
     const auto& x0 = heart_.body(names_[k]).position_mm;
     for (std::size_t i = 0; i < x.size(); ++i) s.max_displacement_mm = std::max(s.max_displacement_mm, (x[i] - x0[i]).norm());
+    for (const auto& v : group_.body(k).velocities_mm_per_ms()) s.max_speed_m_s = std::max(s.max_speed_m_s, v.norm());
     for (double e : group_.body(k).edge_strains()) s.max_strain = std::max(s.max_strain, e), s.min_strain = std::min(s.min_strain, e);
     s.stable_step_ms = std::min(s.stable_step_ms, group_.body(k).stable_step_ms());
   }

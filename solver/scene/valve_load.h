@@ -24,6 +24,7 @@ struct ValveLoadSample {
   double max_strain = 0;           // largest and smallest edge strain (l - l0) / l
   double min_strain = 0;
   int contact_pairs = 0;           // active node-surface contact pairs
+  double max_speed_m_s = 0;        // the fastest node's speed (a valve at rest under its load: ~0)
   double stable_step_ms = 0;       // the group's stable substep
 };
 

@@ -127,6 +127,8 @@ BodyGroup::BodyGroup(std::vector<ShellModel> bodies, const ContactOptions& optio
   if (!(options_.stiffness_kpa_per_mm >= 0 && std::isfinite(options_.stiffness_kpa_per_mm)))
     bad("stiffness_kpa_per_mm", options_.stiffness_kpa_per_mm, ">= 0");
   if (!(options_.skin_mm > 0 && std::isfinite(options_.skin_mm))) bad("skin_mm", options_.skin_mm, "> 0");
+  if (!(options_.damping_ratio >= 0 && options_.damping_ratio <= 2))
+    bad("damping_ratio", options_.damping_ratio, "in [0, 2]");
   if (bodies_.empty()) throw InputError("contact: a body group needs at least one body");
   if (threads < 1 || threads > 256)
     throw InputError("body group: threads = " + std::to_string(threads) + " must be in [1, 256]");
@@ -251,9 +253,17 @@ void BodyGroup::evaluate_contact() {
     std::fill(row_[k].begin(), row_[k].end(), 0.0);
   }
   const double dc = options_.distance_mm, kappa = options_.stiffness_kpa_per_mm;
+  const double zeta = options_.damping_ratio;
+  // The stable step of a damped oscillator under central differences is (sqrt(1 + zeta^2) -
+  // zeta) times the undamped one: the rows grow by the inverse square.
+  const double row_factor = 1 / ((std::sqrt(1 + zeta * zeta) - zeta) * (std::sqrt(1 + zeta * zeta) - zeta));
   for (Pair& p : pairs_) {
     const auto& xa = bodies_[p.a].positions_mm();
     const auto& xb = bodies_[p.b].positions_mm();
+    const auto& va = bodies_[p.a].velocities_mm_per_ms();
+    const auto& vb = bodies_[p.b].velocities_mm_per_ms();
+    const auto& ma = bodies_[p.a].masses_mg();
+    const auto& mb = bodies_[p.b].masses_mg();
     const auto& tri = bodies_[p.b].stress_free_mesh().tri;
     for (std::size_t i = 0; i < xa.size(); ++i) {
       if (p.excluded[i] || p.offset[i] == p.offset[i + 1]) continue;
@@ -283,8 +293,8 @@ void BodyGroup::evaluate_contact() {
         if (clear && s != 0) p.side[i] = s > 0 ? 1 : -1;
         // Near (a candidate) but not in the layer: its stiffness is anticipated in the stable
         // step, so a contact that starts within the next substep does not find it too long.
-        row_[p.a][i] += 2 * k;
-        for (int m = 0; m < 3; ++m) row_[p.b][t[m]] += 2 * k * cp.w[m];
+        row_[p.a][i] += 2 * k * row_factor;
+        for (int m = 0; m < 3; ++m) row_[p.b][t[m]] += 2 * k * cp.w[m] * row_factor;
         continue;
       }
       if (p.side[i] == 0 && clear && s != 0) p.side[i] = s > 0 ? 1 : -1;  // started inside the layer
@@ -297,12 +307,31 @@ void BodyGroup::evaluate_contact() {
         u = p.side[i] < 0 ? Vec3(-n) : n;  // on the surface: push to the remembered side
       }
       const double g = sigma * d;
-      const Vec3 f = (k * (dc - g) * sigma) * u;
+      const Vec3 e = sigma * u;  // the push's direction on node i
+      // The penalty's push k (d_c - g) along e and, with zeta > 0, the viscous layer (ours): a
+      // dashpot on the relative velocity of the node and its closest point; its normal part
+      // may lessen the push but never turn it into a pull.
+      double push = k * (dc - g);
+      Vec3 drag = Vec3::Zero();
+      if (zeta > 0) {
+        Vec3 vp = Vec3::Zero();
+        double mp = 0;
+        for (int m = 0; m < 3; ++m) {
+          vp += cp.w[m] * vb[t[m]];
+          mp += cp.w[m] * mb[t[m]];
+        }
+        const double c = 2 * zeta * std::sqrt(k * ma[i] * mp / (ma[i] + mp));  // mg/ms
+        const Vec3 v_rel = va[i] - vp;
+        const double vn = v_rel.dot(e);  // > 0: separating
+        push = std::max(0.0, push - c * vn);
+        drag = -c * (v_rel - vn * e);
+      }
+      const Vec3 f = push * e + drag;
       force_[p.a][i] += f;
-      row_[p.a][i] += 2 * k;
+      row_[p.a][i] += 2 * k * row_factor;
       for (int m = 0; m < 3; ++m) {
         force_[p.b][t[m]] -= cp.w[m] * f;
-        row_[p.b][t[m]] += 2 * k * cp.w[m];
+        row_[p.b][t[m]] += 2 * k * cp.w[m] * row_factor;
       }
       ++stats_.active;
       if (g < 0) ++stats_.crossed;

@@ -17,8 +17,23 @@
 // -grad W, so the scheme is conservative; they sum to zero (momentum) and, F_i being parallel to
 // x_i - p, their torque vanishes too. A node that crossed B (g < 0) is pushed back, with a force
 // that grows with the depth, not through. Both orders (A, B) and (B, A) are evaluated.
-// The penalty's stiffness enters each node's Gershgorin row (2 k_i on i, 2 k_i w_j on B's nodes),
-// so the bodies' stable_step_ms() include it.
+// A viscous layer (ours, ContactOptions::damping_ratio zeta > 0): inside the layer a dashpot on
+// the relative velocity v_rel = v_i - sum_j w_j v_{B,j} of the node and its closest point, of
+// coefficient c_i = 2 zeta sqrt(k_i mu_i), mu_i = m_i m_p / (m_i + m_p) the reduced mass of the
+// node and the point (m_p = sum_j w_j m_{B,j}), so zeta is the fraction of the penalty spring's
+// critical damping. With v_n = v_rel . e and e = sigma u the push's direction,
+//   F_i = max(0, k_i (d_c - g) - c_i v_n) e - c_i (v_rel - v_n e):
+// the normal part lessens the push but never pulls (no adhesion when the pair separates), the
+// tangential part resists sliding (the film of blood between coapted leaflets, not modelled
+// otherwise). Velocities are those of the substep's half kick (velocity Verlet). It dissipates;
+// the forces' sum still vanishes (their torque no longer does). Without it, surfaces pressed
+// together through the layer chatter: the closed aortic valve's cusps under a held 90 mmHg with
+// the mass damping 0.5/ms keep nodes sliding at 0.6-1.2 m/s, at 0.004 m/s without contact and with
+// zeta 0.5 (docs/fsei.md, session 36); the chatter is along the surfaces: a normal dashpot alone
+// leaves 0.3-0.6 m/s.
+// The penalty's stiffness enters each node's Gershgorin row (2 k_i on i, 2 k_i w_j on B's nodes;
+// with damping divided by (sqrt(1 + zeta^2) - zeta)^2, the central difference's stable-step
+// factor for a damped oscillator), so the bodies' stable_step_ms() include it.
 // Not detected (ours): edge-edge crossings with no node inside the other body's layer (meshes
 // of similar resolution face to face do not produce them in our tests); self-contact of a body.
 // Pairs that are already within d_c in the stress-free meshes (shared annulus, commissures)
@@ -43,6 +58,7 @@ struct ContactOptions {
   ContactRule rule = ContactRule::kPenalty;
   double distance_mm = 0.5;             // d_c: thickness of the contact layer
   double stiffness_kpa_per_mm = 40;     // kappa: k_i = kappa A_i (contact pressure kappa (d_c - g))
+  double damping_ratio = 0;             // zeta: the normal dashpot / the pair's critical damping (ours)
   double skin_mm = 0.25;                // Verlet skin of the candidate lists (rebuilt when any
                                         // node moved more than skin/2 since the last build)
 };

@@ -160,6 +160,56 @@ TEST(StructureContact, PenaltyForcesAreMinusTheEnergyGradientWithoutNetForceOrTo
   check_gradient_momentum_torque(group, "b pushed 0.15 mm through a");
 }
 
+// The viscous layer (ContactOptions::damping_ratio, ours): b sits 0.3 mm above a (inside the
+// 0.5-mm layer). At rest the forces are the penalty's; b sliding along x drags a along and is
+// held back by as much; b approaching is pushed harder; b leaving fast takes the push out but
+// pulls no node of a whose closest point lies inside b's faces (away from the sheets' edges,
+// where the closest point is on b's boundary and the relative velocity is partly tangential,
+// so the drag acts along it). The forces on a and b sum to zero in every case.
+TEST(StructureContact, TheViscousLayerDampsRelativeMotionWithoutPulling) {
+  auto a = clamped_sheet(7, 7, 1.0, 0.5, Vec3::Zero(), "a");
+  auto b = clamped_sheet(6, 7, 1.1, 0.5, Vec3(0.37, 0.21, 0.3), "b");
+  auto b_far = b;
+  for (auto& p : b_far.position_mm) p.z() += 5;
+  ContactOptions o;
+  o.damping_ratio = 1;
+  BodyGroup group({ShellModel(a, seed_materials(), {}), ShellModel(b_far, seed_materials(), {})}, o);
+  auto with_b_velocity = [&](const Vec3& v_mm_per_ms) {
+    std::vector<Vec3> xb = b.position_mm;
+    for (auto& p : xb) p.z() += 0.4;  // from 0.7 mm away: b's side is remembered
+    group.body(1).set_state(xb, std::vector<Vec3>(xb.size(), Vec3::Zero()));
+    group.refresh_contact();
+    group.body(1).set_state(b.position_mm, std::vector<Vec3>(b.position_mm.size(), v_mm_per_ms));
+    group.refresh_contact();
+    Vec3 on_a = Vec3::Zero(), on_b = Vec3::Zero();
+    for (const auto& f : group.contact_forces_mn(0)) on_a += f;
+    for (const auto& f : group.contact_forces_mn(1)) on_b += f;
+    EXPECT_LT((on_a + on_b).norm(), 1e-12 * (on_a.norm() + 1e-300));
+    return on_a;
+  };
+  const Vec3 rest = with_b_velocity(Vec3::Zero());
+  ASSERT_GT(group.contact_stats().active, 10);
+  EXPECT_LT(rest.z(), 0);  // a pushed down, away from b
+  EXPECT_LT(std::abs(rest.x()), 0.02 * std::abs(rest.z()));  // the edges' lateral pushes
+  const Vec3 sliding = with_b_velocity(Vec3(1, 0, 0));  // 1 m/s along x
+  EXPECT_GT(sliding.x() - rest.x(), 0.05 * std::abs(rest.z()));  // dragged along
+  EXPECT_NEAR(sliding.z(), rest.z(), 0.02 * std::abs(rest.z()));
+  const Vec3 approaching = with_b_velocity(Vec3(0, 0, -1));
+  EXPECT_LT(approaching.z(), 1.5 * rest.z());  // pushed harder
+  const Vec3 leaving = with_b_velocity(Vec3(0, 0, 50));
+  int inner = 0;
+  for (std::size_t i = 0; i < group.body(0).node_count(); ++i) {
+    const Vec3& x = group.body(0).positions_mm()[i];
+    if (x.x() < 1.5 || x.x() > 5 || x.y() < 1.5 || x.y() > 4.5) continue;
+    ++inner;
+    EXPECT_LE(group.contact_forces_mn(0)[i].z(), 0) << "node " << i << " of a pulled towards b";
+  }
+  EXPECT_GT(inner, 6);
+  std::cout << "  viscous layer, sum of the forces on a (mN): at rest " << rest.transpose() << "; b sliding at 1 m/s "
+            << sliding.transpose() << "; approaching " << approaching.transpose() << "; leaving at 50 m/s "
+            << leaving.transpose() << "\n";
+}
+
 struct SheetRun {
   double min_gap_loaded_mm = 1e300;  // smallest vertical distance between the surfaces while loaded
   double centre_gap_loaded_mm = 0;   // at the end of the loading phase
@@ -435,13 +485,21 @@ TEST(StructureContact, ListsRebuiltOnlyForTheBodiesThatMovedGiveTheForcesOfAFres
 
 TEST(StructureContact, BadOptionsAreRejected) {
   auto a = clamped_sheet(4, 4, 1.0, 0.5, Vec3::Zero(), "a");
-  auto make = [&](double d, double k, double skin) {
+  auto make = [&](double d, double k, double skin, double zeta = 0) {
     ContactOptions o;
     o.distance_mm = d;
     o.stiffness_kpa_per_mm = k;
     o.skin_mm = skin;
+    o.damping_ratio = zeta;
     return BodyGroup({ShellModel(a, seed_materials(), {})}, o);
   };
+  EXPECT_THROW(make(0.5, 40, 0.25, -0.1), InputError);
+  EXPECT_THROW(make(0.5, 40, 0.25, 2.5), InputError);
+  try {
+    make(0.5, 40, 0.25, 3);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("damping_ratio = 3"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(make(0, 40, 0.25), InputError);
   EXPECT_THROW(make(0.5, -1, 0.25), InputError);
   EXPECT_THROW(make(0.5, 40, 0), InputError);
