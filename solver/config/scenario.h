@@ -165,7 +165,7 @@ struct Structure {
   std::string contact_rule;             // "penalty" | "cell_average" (the seed's)
   double contact_distance_mm;
   double contact_stiffness_kpa_per_mm;
-  double contact_damping_ratio;         // penalty contact: normal dashpot / its critical damping (ours; 0: none)
+  double contact_damping_ratio;         // penalty contact: the viscous layer / its critical damping (ours; 0: none)
   bool mitral_limiter;                  // body "mitral_leaflets": the seed's displacement limiter
   double mitral_limit_mm;
   double mitral_limiter_end_phase;      // scenes fsi/fsei: the limiter holds over phases [0, this) (1: always, ours)
