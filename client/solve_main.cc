@@ -16,6 +16,7 @@
 #include "solver/config/parameter_table.h"
 #include "solver/core/allocator.h"
 #include "solver/core/errors.h"
+#include "solver/core/threads.h"
 #include "solver/io/result_writer.h"
 #include "solver/scene/scene.h"
 
@@ -77,6 +78,8 @@ int main(int argc, char** argv) {
     MPI_Finalize();
     return code;
   }
+  const OpenMpThreads omp = share_cores_among_ranks(MPI_COMM_WORLD);  // collective; solver/core/threads.h
+  if (rank == 0 && !quiet && !list_parameters) std::cerr << "systole-solve: " << omp.describe() << "\n";
   int code = 0;
   try {
     if (list_parameters) {

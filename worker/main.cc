@@ -25,6 +25,7 @@
 #include "service/server/sha256.h"
 #include "solver/core/allocator.h"
 #include "solver/core/errors.h"
+#include "solver/core/threads.h"
 #include "solver/core/version.h"
 #include "solver/io/result_writer.h"
 #include "solver/scene/scene.h"
@@ -351,6 +352,10 @@ int main(int argc, char** argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (!heap_policy && rank == 0)
     spdlog::warn("glibc refused the heap policy (solver/core/allocator.h): large jobs will be slower, values unchanged");
+  // The server's local workers get OMP_NUM_THREADS (service/server/local_workers.cc); a worker
+  // started by hand under mpirun shares the node's cores among its ranks (solver/core/threads.h).
+  const systole::OpenMpThreads omp = systole::share_cores_among_ranks(MPI_COMM_WORLD);
+  if (rank == 0) spdlog::info("{}", omp.describe());
 
   CLI::App app{"systole-worker: runs systole jobs leased from a systole-server (start it under mpirun)"};
   std::string server = "127.0.0.1:50051";

@@ -15,6 +15,7 @@
 #include "solver/config/scenario.h"
 #include "solver/core/allocator.h"
 #include "solver/core/errors.h"
+#include "solver/core/threads.h"
 #include "solver/io/result_writer.h"
 #include "solver/scene/fsei_scene.h"
 
@@ -45,6 +46,8 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (!heap_policy && rank == 0)
     std::fprintf(stderr, "fsei_case: warning: glibc refused the heap policy (solver/core/allocator.h): slower, same values\n");
+  const systole::OpenMpThreads omp = systole::share_cores_among_ranks(MPI_COMM_WORLD);  // solver/core/threads.h
+  if (rank == 0) std::fprintf(stderr, "fsei_case: %s\n", omp.describe().c_str());
   int rc = 0;
   try {
     if (argc < 2 || (std::string(argv[1]) != "fsi" && std::string(argv[1]) != "fsei"))

@@ -29,13 +29,6 @@ pid_t LocalWorkers::spawn(int slot) {
                                 std::to_string(::getpid());
   const std::string log = (options_.log_dir / ("worker-" + std::to_string(slot) + ".log")).string();
   const pid_t parent = ::getpid();
-  // OpenMP threads per rank (ours): the machine's cores shared by every rank of every local
-  // worker, at least 1, unless the operator set OMP_NUM_THREADS. Without it each rank's
-  // OpenMP loops (immersed boundary, EP reaction) start one thread per core and the ranks
-  // oversubscribe the machine, spin-waiting (24 % of an fsi run's CPU on a loaded machine).
-  const long cores = std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN));
-  const std::string omp_threads =
-      std::to_string(std::max(1L, cores / std::max(1L, static_cast<long>(options_.count) * options_.ranks)));
   const pid_t pid = ::fork();
   if (pid < 0) throw std::runtime_error("fork failed");
   if (pid == 0) {
@@ -58,7 +51,8 @@ pid_t LocalWorkers::spawn(int slot) {
     // If mpirun itself gets SIGTERM (e.g. the server died), it SIGTERMs the ranks and SIGKILLs
     // them after this many seconds: time for a worker to give its job back.
     ::setenv("OMPI_MCA_odls_base_sigkill_timeout", "5", 1);
-    ::setenv("OMP_NUM_THREADS", omp_threads.c_str(), 0);  // 0: an operator's setting wins
+    // OpenMP threads: the worker's rule (one per rank unless the operator set OMP_NUM_THREADS,
+    // which the child inherits; solver/core/threads.h).
     const std::string ranks = std::to_string(options_.ranks);
     std::vector<std::string> args{"mpirun", "-np", ranks, "--oversubscribe", "--bind-to", "none",
                                   options_.worker_binary, "--server", options_.server_address,
