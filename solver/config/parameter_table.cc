@@ -783,7 +783,9 @@ const std::vector<SceneDefault>& fsei_calibrated_defaults() {
       // the immersed boundary: closed walls (session 14) that hold their forcing (sessions 12, 16)
       {"fsei.forcing_kernel", "divergence_free"},
       {"fsei.forcing_carry_over", "true"},
-      {"fsei.forcing_carry_over_exclusion_cells", "2"},
+      // within 1 h of another body no carry-over (session 37; 2 h until then switched it off along the
+      // closed cusps' coaptation strips, which then passed 18 ml/s back into the LV through the diastole)
+      {"fsei.forcing_carry_over_exclusion_cells", "1"},
       {"fsei.forcing_carry_over_exclusion_plane", "false"},
       // the coupling: strong, IQN-ILS, one fluid step per interval, the shells first (sessions 10, 19-21)
       {"fsei.strong_coupling", "true"},
