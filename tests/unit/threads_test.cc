@@ -1,4 +1,5 @@
-// The OpenMP team size of the command-line programs (solver/core/threads.h).
+// The OpenMP team size of the command-line programs (solver/core/threads.h); MPI around the
+// tests by tests/fluid/mpi_main.cc.
 #include "solver/core/threads.h"
 
 #include <gtest/gtest.h>
@@ -12,13 +13,6 @@
 #include <string>
 
 namespace {
-
-class MpiEnvironment final : public ::testing::Environment {
- public:
-  void SetUp() override { MPI_Init(nullptr, nullptr); }
-  void TearDown() override { MPI_Finalize(); }
-};
-const auto* const mpi_environment = ::testing::AddGlobalTestEnvironment(new MpiEnvironment);
 
 // Sets or unsets OMP_NUM_THREADS for one test and puts back what was there.
 class ScopedOmpEnv {
