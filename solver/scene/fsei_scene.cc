@@ -395,42 +395,46 @@ std::vector<std::map<std::string, double>> fsei_beat_metrics(const std::vector<S
                                                          diagnostics::Crossing::kDownward))
         m["aortic_flow_reversal_phase"] = (*t_rev - start) / period_s;
     }
-    // The open mitral valve as a clinician reads it (ours, after the Gorlin and Hakki formulas with a discharge
-    // coefficient of 1): the mean transmitral gradient LA − LV and the effective orifice area
-    // A = Q̄ / sqrt(2 Δp̄ / ρ) over the valve's open interval (its opening to its closure, or to the beat's end);
-    // a healthy adult's mitral valve has 4-6 cm² and < 2 mmHg mean gradient, a severe stenosis < 1 cm²
-    // (Baumgartner et al., J Am Soc Echocardiogr 22:1-23, 2009). A closure before the opening is the previous
-    // beat's A wave ending: the interval then runs to the beat's end. The area is left out when the valve did not
-    // open or the mean gradient or flow is not positive.
-    if (const auto open = m.find("mitral_valve_open_phase"); open != m.end()) {
+    // An open valve as a clinician reads it (ours, after the Gorlin and Hakki formulas with a discharge
+    // coefficient of 1): the mean gradient across it (upstream − downstream chamber) and the effective orifice
+    // area A = Q̄ / sqrt(2 Δp̄ / ρ) over its open interval (its opening to its closure, or to the beat's end).
+    // Healthy adults: mitral 4-6 cm² at a mean gradient < 2 mmHg, a severe stenosis < 1 cm²; aortic 3-4 cm², a
+    // severe stenosis < 1 cm² or a mean gradient > 40 mmHg (Baumgartner et al., J Am Soc Echocardiogr 22:1-23,
+    // 2009). A closure before the opening is the previous beat's flow ending (the mitral's A wave): the interval
+    // then runs to the beat's end. The area is left out when the valve did not open or the mean gradient or flow
+    // is not positive.
+    auto read_open_valve = [&](const std::string& valve, std::span<const double> flow, std::span<const double> upstream,
+                               std::span<const double> downstream) {
+      const auto open = m.find(valve + "_valve_open_phase");
+      if (open == m.end()) return;
       const double t_open = start + open->second * period_s;
-      const auto close = m.find("mitral_valve_close_phase");
+      const auto close = m.find(valve + "_valve_close_phase");
       const double t_close =
           close != m.end() && close->second > open->second ? start + close->second * period_s : stop;
-      const std::span<const double> la = window("la_pressure_mmhg");
+      if (!(t_close > t_open)) return;
       std::vector<double> t, q, dp;  // the open interval, its ends interpolated
       auto push = [&](double at) {
         t.push_back(at);
-        q.push_back(diagnostics::value_at(bs.time_s, bs.mitral_flow_ml_s, at));
-        dp.push_back(diagnostics::value_at(bs.time_s, la, at) - diagnostics::value_at(bs.time_s, bs.lv_pressure_mmhg, at));
+        q.push_back(diagnostics::value_at(bs.time_s, flow, at));
+        dp.push_back(diagnostics::value_at(bs.time_s, upstream, at) - diagnostics::value_at(bs.time_s, downstream, at));
       };
       push(t_open);
       for (std::size_t i = 0; i < n; ++i)
         if (bs.time_s[i] > t_open && bs.time_s[i] < t_close) {
           t.push_back(bs.time_s[i]);
-          q.push_back(bs.mitral_flow_ml_s[i]);
-          dp.push_back(la[i] - bs.lv_pressure_mmhg[i]);
+          q.push_back(flow[i]);
+          dp.push_back(upstream[i] - downstream[i]);
         }
       push(t_close);
-      if (t_close > t_open) {
-        const double q_mean_ml_s = diagnostics::time_average(t, q), dp_mean_mmhg = diagnostics::time_average(t, dp);
-        m["mitral_mean_gradient_mmhg"] = dp_mean_mmhg;
-        if (dp_mean_mmhg > 0 && q_mean_ml_s > 0) {
-          const double speed_m_s = std::sqrt(2 * dp_mean_mmhg * units::kPaPerMmHg / blood_density_kg_per_m3);
-          m["mitral_effective_orifice_area_cm2"] = q_mean_ml_s / (100 * speed_m_s);  // ml/s / (cm/s)
-        }
+      const double q_mean_ml_s = diagnostics::time_average(t, q), dp_mean_mmhg = diagnostics::time_average(t, dp);
+      m[valve + "_mean_gradient_mmhg"] = dp_mean_mmhg;
+      if (dp_mean_mmhg > 0 && q_mean_ml_s > 0) {
+        const double speed_m_s = std::sqrt(2 * dp_mean_mmhg * units::kPaPerMmHg / blood_density_kg_per_m3);
+        m[valve + "_effective_orifice_area_cm2"] = q_mean_ml_s / (100 * speed_m_s);  // ml/s / (cm/s)
       }
-    }
+    };
+    read_open_valve("mitral", bs.mitral_flow_ml_s, window("la_pressure_mmhg"), bs.lv_pressure_mmhg);
+    read_open_valve("aortic", bs.aortic_flow_ml_s, bs.lv_pressure_mmhg, bs.aortic_pressure_mmhg);
     m["beat"] = b;
     m["beat_start_s"] = start;
     for (const auto& [key, value] : m)

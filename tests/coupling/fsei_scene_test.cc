@@ -228,7 +228,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   const double ao_close_ms = 300 - 250 * std::asin(0.05) / pi, mi_close_ms = 800 - 460 * std::asin(0.05) / pi;
   // the open mitral valve's mean gradient LA − LV and effective area Q̄ / sqrt(2 Δp̄ / ρ) from its opening to
   // t_close (ms in the beat), by a fine midpoint rule on the exact curves
-  struct OpenMitral {
+  struct OpenValve {  // an open valve's reading
     double gradient_mmhg, area_cm2;
   };
   auto open_mitral = [&](double t_close) {
@@ -241,8 +241,21 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
       dp_sum += 9 - (tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0);
     }
     const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;  // ml/s, mmHg
-    return OpenMitral{dp_mean, q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060))};
+    return OpenValve{dp_mean, q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060))};
   };
+  // the open aortic valve: LV − root (80 mmHg) and the ejection's mean over its open interval, the same rule
+  const OpenValve open_aortic = [&] {
+    const double t_open = 50 + 250 * std::asin(0.05) / pi;
+    double q_sum = 0, dp_sum = 0;
+    const int steps = 200000;
+    for (int i = 0; i < steps; ++i) {
+      const double tb = t_open + (ao_close_ms - t_open) * (i + 0.5) / steps;
+      q_sum += aortic(tb);
+      dp_sum += 10 + 110 * std::sin(pi * tb / 350) - 80;
+    }
+    const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;
+    return OpenValve{dp_mean, q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060))};
+  }();
   const double esv = volume(ao_close_ms), edv = volume(0);
   for (std::size_t b = 0; b < 2; ++b) {
     const auto& m = beats[b];
@@ -265,9 +278,11 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
     EXPECT_EQ(m.at("lv_longitudinal_strain_min"), -0.15);
     EXPECT_EQ(m.at("la_volume_max_ml"), 40);
     // the open mitral valve: LA 9 mmHg, the LV curve above; means over the open interval by a fine midpoint rule
-    const OpenMitral expected = open_mitral(mi_close_ms);
+    const OpenValve expected = open_mitral(mi_close_ms);
     EXPECT_NEAR(m.at("mitral_mean_gradient_mmhg"), expected.gradient_mmhg, 0.01);
     EXPECT_NEAR(m.at("mitral_effective_orifice_area_cm2"), expected.area_cm2, 0.01 * expected.area_cm2);
+    EXPECT_NEAR(m.at("aortic_mean_gradient_mmhg"), open_aortic.gradient_mmhg, 0.01);
+    EXPECT_NEAR(m.at("aortic_effective_orifice_area_cm2"), open_aortic.area_cm2, 0.01 * open_aortic.area_cm2);
   }
   // the previous beat's A wave still running at a beat's start (a flow of half the peak over its first 20 ms, in
   // every beat): the valve "closes" at 20 ms, opens as before, and its open interval runs to the beat's end
@@ -277,7 +292,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
       if (std::fmod(static_cast<double>(i), T) < 20) carried[7].values[i] = 0.5 * Q;
     const auto carried_beats = fsei_beat_metrics(carried, T, 1060, "fsi");
     ASSERT_EQ(carried_beats.size(), 2u);
-    const OpenMitral expected = open_mitral(T);
+    const OpenValve expected = open_mitral(T);
     for (const auto& m : carried_beats) {
       EXPECT_LT(m.at("mitral_valve_close_phase"), m.at("mitral_valve_open_phase"));
       EXPECT_NEAR(m.at("mitral_mean_gradient_mmhg"), expected.gradient_mmhg, 0.01);
@@ -290,6 +305,13 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   for (const auto& m : fsei_beat_metrics(reversed, T, 1060, "fsi")) {
     EXPECT_LT(m.at("mitral_mean_gradient_mmhg"), 0);
     EXPECT_EQ(m.count("mitral_effective_orifice_area_cm2"), 0u);
+  }
+  // a root above the LV through the ejection: the aortic gradient is negative, no area
+  std::vector<Series> high_root = series;
+  for (double& p : high_root[3].values) p = 200;
+  for (const auto& m : fsei_beat_metrics(high_root, T, 1060, "fsi")) {
+    EXPECT_LT(m.at("aortic_mean_gradient_mmhg"), 0);
+    EXPECT_EQ(m.count("aortic_effective_orifice_area_cm2"), 0u);
   }
   EXPECT_THROW(fsei_beat_metrics(series, T, 0, "fsi"), std::invalid_argument);
   // a non-finite sample is a diagnosis, never a metric; a missing series a programming error
