@@ -17,7 +17,7 @@
 # and STEPS choose the levels of the full factorial design, or DESIGN lists the runs of a reduced
 # one as heart_rate:stiffness:step triples (e.g. DESIGN="40:4:1 180:0.5:1"), longest first.
 #   [END_PHASE=0.4] [RATES="40 70 180"] [STIFFNESS="0.5 1 4"] [STEPS="1 2 4 8"] [DESIGN=...]
-#   [PARALLEL=2] [LOGS=DIR (keep each run's N.err samples and N.out metrics)]
+#   [PARALLEL=2] [LOGS=DIR (keep each run's N.err samples, N.out metrics and N.row table row)]
 #   bench/coupling/fsei_stress.sh [build/bin/fsei_case] > table.md
 set -u
 exe=${1:-build/bin/fsei_case}
@@ -74,7 +74,10 @@ run_one() {
   verdict=${verdict//|/\\|}  # a markdown table cell
   local last
   last=$(grep "^fsi t_ms" "$work/$id.err" | tail -n 1 | awk '{print $3}')
-  printf '| %s | x%s | %s | %s of %s | %s | %s s |\n' "$hr" "$k" "$step_label" "${last:-0}" "$end_ms" "$verdict" "$wall"
+  local row
+  row=$(printf '| %s | x%s | %s | %s of %s | %s | %s s |' "$hr" "$k" "$step_label" "${last:-0}" "$end_ms" "$verdict" "$wall")
+  echo "$row"
+  echo "$row" > "$work/$id.row"  # the run's row as soon as it ends (the table below is sorted at the end)
 }
 export -f run_one
 export exe end_phase timeout_s work EXTRA C_LV C_LA C_LEAFLETS C_AORTA
