@@ -62,6 +62,16 @@ int main(int argc, char** argv) {
     }
     doc["scene"] = argv[1];
     const systole::config::Scenario s = systole::config::parse_scenario(doc);
+    // The directories are made (or refused) before the run, not at its end: a run of an hour once lost its
+    // outputs to a missing out=DIR (session 38). Every rank makes them (idempotent), so every rank agrees.
+    for (const auto& [name, dir] : {std::pair<const char*, std::filesystem::path>{"out", out}, {"checkpoint", checkpoint}}) {
+      if (dir.empty()) continue;
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);
+      if (!std::filesystem::is_directory(dir))
+        throw systole::InputError(std::string(name) + "=" + dir.string() + ": cannot make the directory" +
+                                  (ec ? " (" + ec.message() + ")" : std::string()) + "; allowed: a writable directory path");
+    }
     Printer control(rank, out, checkpoint);
     const systole::RunResult r = systole::scene::run_fsei(s, control);
     if (rank == 0) {

@@ -290,8 +290,12 @@ void write_wss_phase_average(const std::filesystem::path& dir, const structure::
   const char* owner = "fsei wss phase average";
   const std::string h5name = "fsei_wss_phase.h5";
   const std::string path = (dir / h5name).string();
+  std::error_code made;  // the output directory may not exist yet (fsei_case out=DIR; a missing one cost session 38 a run's end)
+  std::filesystem::create_directories(dir, made);
   const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (file < 0) throw std::runtime_error(std::string(owner) + ": cannot create " + path);
+  if (file < 0)
+    throw std::runtime_error(std::string(owner) + ": cannot create " + path +
+                             (made ? " (the directory: " + made.message() + ")" : std::string()));
   const int bins = wss.bins();
   std::vector<double> phase(static_cast<std::size_t>(bins)), beats(static_cast<std::size_t>(bins));
   for (int j = 0; j < bins; ++j) {

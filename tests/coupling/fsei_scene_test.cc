@@ -502,8 +502,9 @@ TEST(FseiFields, WssPhaseAverageFileHoldsEveryBodysBins) {
     for (std::size_t q = 0; q < n; ++q) v[q] = j + q / 100.0 + (k < 3 ? c[k] : 0.0);
     wss.add(i * period / 40, v);
   }
-  const auto dir = std::filesystem::temp_directory_path() / ("systole-wss-" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
+  const auto top = std::filesystem::temp_directory_path() / ("systole-wss-" + std::to_string(getpid()));
+  const auto dir = top / "not-yet-made";  // the writer makes a missing output directory (it once lost a run's end)
+  std::filesystem::remove_all(top);
   write_wss_phase_average(dir, group, {"lv", "la"}, wss);
   const hid_t file = H5Fopen((dir / "fsei_wss_phase.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
@@ -527,7 +528,7 @@ TEST(FseiFields, WssPhaseAverageFileHoldsEveryBodysBins) {
   std::ifstream xmf(dir / "fsei_wss_phase.xmf");
   const std::string text((std::istreambuf_iterator<char>(xmf)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("fsei_wss_phase.h5:/la/bin_3/wss_rms_pa"), std::string::npos);
-  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(top);
 }
 
 // The first 3 ms of systole at the coarse preset, prescribed tension (fsi): everything is
