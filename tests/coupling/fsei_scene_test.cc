@@ -210,6 +210,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
     if (tb > 340) v += Q * 460e-3 / pi * (1 - std::cos(pi * (tb - 340) / 460));
     return v;
   };
+  auto lv_pressure = [&](double tb) { return tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0; };  // mmHg
   std::vector<Series> series(13);
   const char* names[] = {"time_s", "lv_pressure_mmhg", "la_pressure_mmhg", "aortic_root_pressure_mmhg", "lv_volume_ml",
                          "la_volume_ml", "aortic_flow_ml_s", "mitral_flow_ml_s", "kinetic_energy_mj", "lv_twist_deg",
@@ -218,7 +219,7 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   for (const char* extra : {"aortic_tip_velocity_m_s", "aortic_cusps_wss_max_pa"}) series.push_back({extra, "", {}});
   for (int i = 0; i <= 2000; ++i) {
     const double t = i, tb = std::fmod(t, T);
-    const double values[] = {1e-3 * t, tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0, 9, 80, volume(tb), 40,
+    const double values[] = {1e-3 * t, lv_pressure(tb), 9, 80, volume(tb), 40,
                              aortic(tb), mitral(tb), 1e-3 * t /* grows: each beat's own peak */,
                              -10 * std::sin(pi * tb / T), -0.15, -0.2, 0.5, 1.2, 3};
     for (std::size_t k = 0; k < series.size(); ++k) series[k].values.push_back(values[k]);
@@ -226,36 +227,29 @@ TEST(FseiScene, BeatMetricsOfWholeBeatsFromTheSeries) {
   const auto beats = fsei_beat_metrics(series, T, 1060, "fsi");
   ASSERT_EQ(beats.size(), 2u);  // the half beat at the end is left out
   const double ao_close_ms = 300 - 250 * std::asin(0.05) / pi, mi_close_ms = 800 - 460 * std::asin(0.05) / pi;
-  // the open mitral valve's mean gradient LA − LV and effective area Q̄ / sqrt(2 Δp̄ / ρ) from its opening to
-  // t_close (ms in the beat), by a fine midpoint rule on the exact curves
+  // an open valve's mean gradient (upstream − downstream) and effective area Q̄ / sqrt(2 Δp̄ / ρ) over [t_open,
+  // t_close] (ms in the beat), by a fine midpoint rule on the exact curves
   struct OpenValve {  // an open valve's reading
     double gradient_mmhg, area_cm2;
   };
-  auto open_mitral = [&](double t_close) {
-    const double t_open = 340 + 460 * std::asin(0.05) / pi;
+  auto open_valve = [](double t_open, double t_close, const auto& flow_ml_s, const auto& gradient_mmhg) {
     double q_sum = 0, dp_sum = 0;
     const int steps = 200000;
     for (int i = 0; i < steps; ++i) {
       const double tb = t_open + (t_close - t_open) * (i + 0.5) / steps;
-      q_sum += mitral(tb);
-      dp_sum += 9 - (tb < 350 ? 10 + 110 * std::sin(pi * tb / 350) : 8.0);
+      q_sum += flow_ml_s(tb);
+      dp_sum += gradient_mmhg(tb);
     }
     const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;  // ml/s, mmHg
     return OpenValve{dp_mean, q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060))};
   };
-  // the open aortic valve: LV − root (80 mmHg) and the ejection's mean over its open interval, the same rule
-  const OpenValve open_aortic = [&] {
-    const double t_open = 50 + 250 * std::asin(0.05) / pi;
-    double q_sum = 0, dp_sum = 0;
-    const int steps = 200000;
-    for (int i = 0; i < steps; ++i) {
-      const double tb = t_open + (ao_close_ms - t_open) * (i + 0.5) / steps;
-      q_sum += aortic(tb);
-      dp_sum += 10 + 110 * std::sin(pi * tb / 350) - 80;
-    }
-    const double q_mean = q_sum / steps, dp_mean = dp_sum / steps;
-    return OpenValve{dp_mean, q_mean / (100 * std::sqrt(2 * dp_mean * 133.322387415 / 1060))};
-  }();
+  // the mitral valve: LA (9 mmHg) − LV from its opening
+  auto open_mitral = [&](double t_close) {
+    return open_valve(340 + 460 * std::asin(0.05) / pi, t_close, mitral, [&](double tb) { return 9 - lv_pressure(tb); });
+  };
+  // the aortic valve: LV − root (80 mmHg) over its open interval
+  const OpenValve open_aortic = open_valve(50 + 250 * std::asin(0.05) / pi, ao_close_ms, aortic,
+                                           [&](double tb) { return lv_pressure(tb) - 80; });
   const double esv = volume(ao_close_ms), edv = volume(0);
   for (std::size_t b = 0; b < 2; ++b) {
     const auto& m = beats[b];
