@@ -652,13 +652,14 @@ std::vector<Param> build_table() {
                              "of filling a fixed interval with one or two (docs/benchmarks.md: with strong coupling "
                              "the passes repeat the fluid's steps)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fsei.abort_mean_speed_m_s, "m/s", 1, 0, 20,
-                                    "Scenes 'fsei'/'fsi': the guard for a slow runaway (ours): at every sample the "
+                                    "Scenes 'fsei'/'fsi': the guard for a runaway (ours): at every sample the "
                                     "fluid box's kinetic energy E is spread over the blood of the LV and the LA (their "
                                     "volumes V) as a mean speed sqrt(2E / (rho V)); above this speed and above "
                                     "fsei.abort_mean_speed_orifice_ratio x the largest mean velocity through a valve's "
-                                    "orifice so far (flow / orifice area) the run stops with the fastest cell and the "
-                                    "time. Energy let in by the coupling over tens of ms trips it where the fluid's "
-                                    "per-step guards do not (docs/fsei.md, sessions 27-28). A guard, not a parameter of "
+                                    "orifice so far (flow / orifice area) the run stops with the fastest cell, the "
+                                    "time and how long the energy took to double. Energy let in by the coupling over "
+                                    "tens of ms trips it where the fluid's per-step guards do not (docs/fsei.md, "
+                                    "sessions 27-28), and so does a blow-up within a few ms (session 38). A guard, not a parameter of "
                                     "the trajectory: a checkpoint resumes with another value."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fsei.abort_mean_speed_orifice_ratio, "", 1, 0, 100,
                                     "Scenes 'fsei'/'fsi': the slow-runaway guard's second bound (ours; see "

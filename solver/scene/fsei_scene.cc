@@ -1203,7 +1203,16 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
              << " m/s over the chambers' blood, above fsei.abort_mean_speed_m_s = " << fs.abort_mean_speed_m_s
              << " and above fsei.abort_mean_speed_orifice_ratio = " << fs.abort_mean_speed_orifice_ratio
              << " x the largest mean velocity through a valve's orifice so far (" << orifice_m_s
-             << " m/s): energy rising faster than the streams (a slow runaway, docs/fsei.md)";
+             << " m/s): energy out of proportion to the streams";
+        // how fast it came (an abrupt blow-up within a few ms or a slow rise over tens; docs/fsei.md,
+        // sessions 28 and 38): the latest earlier sample at half the energy or less
+        std::size_t half = ke.size() - 1;
+        while (half > 0 && ke[half] > 0.5 * ke.back()) --half;
+        if (ke[half] <= 0.5 * ke.back())
+          what << "; it doubled in the last " << t_ms.back() - t_ms[half] << " ms (" << ke[half] << " mJ at t = "
+               << 1e-3 * t_ms[half] << " s)";
+        else
+          what << "; it was above half this at every earlier sample (since t = " << 1e-3 * t_ms.front() << " s)";
         throw InstabilityError("fluid", place.str(), 1e-3 * t_ms.back(), what.str());
       }
     }

@@ -1013,6 +1013,9 @@ TEST(FseiScene, TheSlowRunawayGuardNeedsBothItsBounds) {
       EXPECT_NE(m.find("fsei.abort_mean_speed_m_s"), std::string::npos) << m;
       EXPECT_NE(m.find("fsei.abort_mean_speed_orifice_ratio"), std::string::npos) << m;
       EXPECT_NE(m.find("fastest cell (i,j,k)"), std::string::npos) << m;
+      // how fast the energy came: the blood starts at rest, so every stop finds an earlier sample at
+      // half the energy or less
+      EXPECT_NE(m.find("it doubled in the last"), std::string::npos) << m;
       return e.time_s();
     }
     return -1.0;  // completed
