@@ -28,6 +28,12 @@ void validate(const ForcingParameters& p) {
     m << "ibm carry-over exclusion = " << p.carry_over_exclusion_cells << " cells is out of range [0, 4]";
     throw InputError(m.str());
   }
+  if (!(p.carry_over_exclusion_rigid_cells >= 0 && p.carry_over_exclusion_rigid_cells <= 4)) {
+    std::ostringstream m;
+    m << "ibm carry-over exclusion next to a rigid body = " << p.carry_over_exclusion_rigid_cells
+      << " cells is out of range [0, 4]";
+    throw InputError(m.str());
+  }
   if (!(p.rebuild_tolerance_cells >= 0 && p.rebuild_tolerance_cells <= 0.5)) {
     std::ostringstream m;
     m << "ibm rebuild tolerance = " << p.rebuild_tolerance_cells << " cells is out of range [0, 0.5]";
@@ -57,11 +63,16 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
 void DirectForcing::update_carry_mask() {
   carries_.clear();
   excluded_ = 0;
-  if (!par_.carry_over || par_.carry_over_exclusion_cells <= 0) return;
+  const double r_pair = par_.carry_over_exclusion_cells * markers_.h(),
+               r_rigid = std::max(par_.carry_over_exclusion_rigid_cells * markers_.h(), r_pair);
+  if (!par_.carry_over || r_rigid <= 0) return;
   const MarkerArrays& m = markers_.markers();
   const std::size_t n = m.size();
   const grid::Grid& g = slabs_.grid();
-  const double r = par_.carry_over_exclusion_cells * markers_.h(), r2 = r * r;
+  const double r = r_rigid, r2_pair = r_pair * r_pair, r2_rigid = r_rigid * r_rigid;  // hash cells of the wider
+  auto rigid = [&](std::size_t marker) {
+    return markers_.bodies()[static_cast<std::size_t>(m.body[marker])].options.rigid;
+  };
   const std::array<int, 3> dims{static_cast<int>(g.lx() / r) + 1, static_cast<int>(g.ly() / r) + 1,
                                 static_cast<int>(g.lz() / r) + 1};
   auto coord = [&](double x, int d) { return std::clamp(static_cast<int>(std::floor(x / r)), 0, dims[d] - 1); };
@@ -102,8 +113,7 @@ void DirectForcing::update_carry_mask() {
         for (std::uint32_t q0 = start[cell]; q0 < start[cell + 1]; ++q0) {
           const std::size_t b = order[q0];
           if (bit_per_body && (around & ~bit(m.body[b])) == 0) continue;  // only its own body around
-          if (!par_.carry_over_exclusion_rigid && markers_.bodies()[static_cast<std::size_t>(m.body[b])].options.rigid)
-            continue;
+          if (!par_.carry_over_exclusion_rigid && rigid(b)) continue;
           const Vec3& x = m.position[b];
           bool near_other = false;
           for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)
@@ -112,7 +122,8 @@ void DirectForcing::update_carry_mask() {
                 const std::size_t c = index(i, j, k);
                 for (std::uint32_t q = start[c]; q < start[c + 1]; ++q) {
                   const std::size_t o = order[q];
-                  if (m.body[o] != m.body[b] && (m.position[o] - x).squaredNorm() < r2) {
+                  if (m.body[o] != m.body[b] &&
+                      (m.position[o] - x).squaredNorm() < (rigid(b) || rigid(o) ? r2_rigid : r2_pair)) {
                     near_other = true;
                     break;
                   }

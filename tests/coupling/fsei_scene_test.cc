@@ -417,6 +417,9 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   const std::string predictor = parse_error_of("fsi", {{"fsei", {{"first_pass_predictor", "quadratic"}}}});
   EXPECT_NE(predictor.find("fsei.first_pass_predictor"), std::string::npos) << predictor;
   EXPECT_NE(predictor.find("linear"), std::string::npos) << predictor;
+  // The plane's carry-over exclusion beyond its range [0, 4] cells.
+  const std::string ring = parse_error_of("fsi", {{"fsei", {{"forcing_carry_over_exclusion_plane_cells", 5}}}});
+  EXPECT_NE(ring.find("fsei.forcing_carry_over_exclusion_plane_cells"), std::string::npos) << ring;
 }
 
 // Scene fsi's prescribed tension: the LA's peak is its fraction of the LV's (ours; the default

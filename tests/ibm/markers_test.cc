@@ -24,6 +24,12 @@ BodyOptions unit_options(ExpectedNormals n = ExpectedNormals::unchecked) {
   return o;
 }
 
+BodyOptions deformable_options() {
+  BodyOptions o = unit_options();
+  o.rigid = false;
+  return o;
+}
+
 // The carry-over's anti-windup (ForcingParameters::carry_over_exclusion_cells, ours): the
 // markers within r h of another body's marker carry nothing over; exactly those, by brute force.
 // Two spheres of diameter 0.5 whose surfaces are 0.1 (one h) apart.
@@ -69,9 +75,7 @@ TEST(CarryOverExclusion, MarkersNearAnotherBodyAreExactlyTheExcludedOnes) {
 TEST(CarryOverExclusion, ARigidBodyCanKeepItsCarryOver) {
   const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
   Markers m(kGrid);
-  BodyOptions deformable = unit_options();
-  deformable.rigid = false;
-  m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", deformable);
+  m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", deformable_options());
   m.add_body(sphere_mesh(Vec3(26.4, 24, 24), 6, 2), "right", unit_options());
   ForcingParameters p;
   p.carry_over = true;
@@ -91,6 +95,51 @@ TEST(CarryOverExclusion, ARigidBodyCanKeepItsCarryOver) {
   ASSERT_GT(near_right, 0u);
   EXPECT_EQ(both.carry_over_excluded(), near_left + near_right);
   EXPECT_EQ(spared.carry_over_excluded(), near_left);
+}
+
+// carry_over_exclusion_rigid_cells (ours): a pair with a rigid body's marker excludes within the
+// wider of the two radii, any other pair within carry_over_exclusion_cells: exactly those, by
+// brute force. Two deformable spheres one h apart and a rigid one 1.5 h from the first.
+TEST(CarryOverExclusion, ARigidBodyCanHaveAWiderRing) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
+  Markers m(kGrid);
+  m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "left", deformable_options());
+  m.add_body(sphere_mesh(Vec3(26.4, 24, 24), 6, 2), "right", deformable_options());
+  m.add_body(sphere_mesh(Vec3(19.2, 38, 24), 6, 2), "rigid", unit_options());
+  const auto& a = m.markers();
+  auto brute_force = [&](double pair_cells, double rigid_cells) {
+    std::size_t near = 0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      for (std::size_t j = 0; j < a.size(); ++j) {
+        const double cells = a.body[i] == 2 || a.body[j] == 2 ? std::max(pair_cells, rigid_cells) : pair_cells;
+        if (a.body[i] != a.body[j] && (a.position[i] - a.position[j]).norm() < cells * m.h()) {
+          ++near;
+          break;
+        }
+      }
+    return near;
+  };
+  std::size_t excluded[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    ForcingParameters p;
+    p.carry_over = true;
+    p.carry_over_exclusion_cells = 2;
+    p.carry_over_exclusion_rigid_cells = k == 0 ? 0 : 3;  // 0: as any pair
+    excluded[k] = DirectForcing(slabs, m, p).carry_over_excluded();
+    EXPECT_EQ(excluded[k], brute_force(p.carry_over_exclusion_cells, p.carry_over_exclusion_rigid_cells)) << k;
+  }
+  std::printf("  [measured] excluded with the rigid ring at 2 h: %zu, at 3 h: %zu of %zu markers\n", excluded[0],
+              excluded[1], m.size());
+  EXPECT_GT(excluded[1], excluded[0]);  // the wider ring reaches more markers
+  // the radius alone, without the pairs' (0 h), still excludes next to the rigid body
+  ForcingParameters only_rigid;
+  only_rigid.carry_over = true;
+  only_rigid.carry_over_exclusion_rigid_cells = 3;
+  EXPECT_EQ(DirectForcing(slabs, m, only_rigid).carry_over_excluded(), brute_force(0, 3));
+  EXPECT_GT(brute_force(0, 3), 0u);
+  ForcingParameters bad;
+  bad.carry_over_exclusion_rigid_cells = -1;
+  EXPECT_THROW(validate(bad), InputError);
 }
 
 TEST(Markers, OneMarkerPerTileWithAreaNormalAndBody) {
