@@ -49,7 +49,7 @@ struct ForcingParameters {
   // max(this, carry_over_exclusion_cells) × h (ours), [0, 4]; 0: as any pair. A wider ring where a
   // deformable wall meets the rigid valvular plane: there the wall's motion and the plane's rest
   // conflict over more of the kernel's support than between two moving bodies (a stiff LA wound up
-  // 1.5-2 h below the plane at 180 bpm: docs/fsei.md, session 39).
+  // 1.1-2.4 mm, 0.7-1.6 h, below the plane at 180 bpm: docs/fsei.md, session 39).
   double carry_over_exclusion_rigid_cells = 0.0;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
