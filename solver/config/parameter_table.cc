@@ -644,6 +644,13 @@ std::vector<Param> build_table() {
                            "fsei.forcing_carry_over_exclusion_cells) grid spacings of the rigid valvular plane's "
                            "markers carry no force over (ours; a wider anti-windup ring where the chambers' walls "
                            "meet the plane); 0: the plane as any body. docs/fsei.md session 39."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_plane_wall_cells, "", 0, 0, 4,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the walls' markers (LV, LA, aorta) "
+                           "within max(this, fsei.forcing_carry_over_exclusion_plane_cells, "
+                           "fsei.forcing_carry_over_exclusion_cells) grid spacings of the rigid valvular plane's "
+                           "markers carry no force over (ours); the leaflets and cusps keep the narrower ring, so "
+                           "the closed valves' bases keep their hold; 0: the walls as any body. docs/fsei.md "
+                           "sessions 39 and 40."));
   t.push_back(SYSTOLE_CHOICE(fsei.slab_split, "balanced", (std::vector<std::string_view>{"balanced", "uniform"}),
                              "Scenes 'fsei'/'fsi' on several MPI ranks: how the fluid's z planes are split over the "
                              "ranks: balanced (ours), by each plane's work, its cells plus the immersed boundary's "

@@ -34,6 +34,12 @@ void validate(const ForcingParameters& p) {
       << " cells is out of range [0, 4]";
     throw InputError(m.str());
   }
+  if (!(p.carry_over_exclusion_rigid_wall_cells >= 0 && p.carry_over_exclusion_rigid_wall_cells <= 4)) {
+    std::ostringstream m;
+    m << "ibm carry-over exclusion between a rigid body and a wall = " << p.carry_over_exclusion_rigid_wall_cells
+      << " cells is out of range [0, 4]";
+    throw InputError(m.str());
+  }
   if (!(p.rebuild_tolerance_cells >= 0 && p.rebuild_tolerance_cells <= 0.5)) {
     std::ostringstream m;
     m << "ibm rebuild tolerance = " << p.rebuild_tolerance_cells << " cells is out of range [0, 0.5]";
@@ -63,16 +69,30 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
 void DirectForcing::update_carry_mask() {
   carries_.clear();
   excluded_ = 0;
+  // The exclusion radius of a pair by the bodies' kinds: 0 a two-sided deformable body (a
+  // leaflet), 1 a one-sided deformable body (a wall), 2 a rigid body; kind per body computed
+  // once here, not in the pair loop.
   const double r_pair = par_.carry_over_exclusion_cells * markers_.h(),
-               r_rigid = std::max(par_.carry_over_exclusion_rigid_cells * markers_.h(), r_pair);
-  if (!par_.carry_over || r_rigid <= 0) return;
+               r_rigid = std::max(par_.carry_over_exclusion_rigid_cells * markers_.h(), r_pair),
+               r_wall = std::max(par_.carry_over_exclusion_rigid_wall_cells * markers_.h(), r_rigid);
+  if (!par_.carry_over || r_wall <= 0) return;
   const MarkerArrays& m = markers_.markers();
   const std::size_t n = m.size();
   const grid::Grid& g = slabs_.grid();
-  const double r = r_rigid, r2_pair = r_pair * r_pair, r2_rigid = r_rigid * r_rigid;  // hash cells of the wider
-  auto rigid = [&](std::size_t marker) {
-    return markers_.bodies()[static_cast<std::size_t>(m.body[marker])].options.rigid;
-  };
+  std::vector<int> kind_of_body(markers_.bodies().size());
+  for (std::size_t k = 0; k < kind_of_body.size(); ++k) {
+    const BodyOptions& o = markers_.bodies()[k].options;
+    kind_of_body[k] = o.rigid ? 2 : (o.sides == Sides::one ? 1 : 0);
+  }
+  const double r = r_wall;  // hash cells of the widest radius
+  std::array<std::array<double, 3>, 3> r2{};
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c) {
+      const double rr = (a == 2 && c == 1) || (a == 1 && c == 2) ? r_wall : (a == 2 || c == 2 ? r_rigid : r_pair);
+      r2[a][c] = rr * rr;
+    }
+  auto kind = [&](std::size_t marker) { return kind_of_body[static_cast<std::size_t>(m.body[marker])]; };
+  auto rigid = [&](std::size_t marker) { return kind(marker) == 2; };
   const std::array<int, 3> dims{static_cast<int>(g.lx() / r) + 1, static_cast<int>(g.ly() / r) + 1,
                                 static_cast<int>(g.lz() / r) + 1};
   auto coord = [&](double x, int d) { return std::clamp(static_cast<int>(std::floor(x / r)), 0, dims[d] - 1); };
@@ -115,6 +135,7 @@ void DirectForcing::update_carry_mask() {
           if (bit_per_body && (around & ~bit(m.body[b])) == 0) continue;  // only its own body around
           if (!par_.carry_over_exclusion_rigid && rigid(b)) continue;
           const Vec3& x = m.position[b];
+          const std::array<double, 3>& r2_b = r2[kind(b)];
           bool near_other = false;
           for (int k = std::max(ck - 1, 0); k <= std::min(ck + 1, dims[2] - 1) && !near_other; ++k)
             for (int j = std::max(cj - 1, 0); j <= std::min(cj + 1, dims[1] - 1) && !near_other; ++j)
@@ -122,8 +143,7 @@ void DirectForcing::update_carry_mask() {
                 const std::size_t c = index(i, j, k);
                 for (std::uint32_t q = start[c]; q < start[c + 1]; ++q) {
                   const std::size_t o = order[q];
-                  if (m.body[o] != m.body[b] &&
-                      (m.position[o] - x).squaredNorm() < (rigid(b) || rigid(o) ? r2_rigid : r2_pair)) {
+                  if (m.body[o] != m.body[b] && (m.position[o] - x).squaredNorm() < r2_b[kind(o)]) {
                     near_other = true;
                     break;
                   }

@@ -750,6 +750,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   forcing_parameters.carry_over_exclusion_cells = fs.forcing_carry_over_exclusion_cells;
   forcing_parameters.carry_over_exclusion_rigid = fs.forcing_carry_over_exclusion_plane;  // the plane: the one rigid body
   forcing_parameters.carry_over_exclusion_rigid_cells = fs.forcing_carry_over_exclusion_plane_cells;
+  forcing_parameters.carry_over_exclusion_rigid_wall_cells = fs.forcing_carry_over_exclusion_plane_wall_cells;
   forcing_parameters.iterations = fs.forcing_iterations;
   forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
   forcing_parameters.kernel =
@@ -1652,13 +1653,14 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
     result.notes.push_back(m.str());
   }
-  if (forcing_parameters.carry_over &&
-      std::max(forcing_parameters.carry_over_exclusion_cells, forcing_parameters.carry_over_exclusion_rigid_cells) > 0) {
+  const double plane_ring_cells =
+      std::max(forcing_parameters.carry_over_exclusion_cells, forcing_parameters.carry_over_exclusion_rigid_cells);
+  const double wall_plane_ring_cells = std::max(plane_ring_cells, forcing_parameters.carry_over_exclusion_rigid_wall_cells);
+  if (forcing_parameters.carry_over && wall_plane_ring_cells > 0) {
     std::ostringstream m;
     m << "carry-over forcing: " << forcing.carry_over_excluded() << " of " << markers.size() << " markers (those within "
-      << forcing_parameters.carry_over_exclusion_cells << " h of another body's, "
-      << std::max(forcing_parameters.carry_over_exclusion_cells, forcing_parameters.carry_over_exclusion_rigid_cells)
-      << " h of the plane's, at the end) carry nothing over";
+      << forcing_parameters.carry_over_exclusion_cells << " h of another body's, " << plane_ring_cells
+      << " h of the plane's (walls: " << wall_plane_ring_cells << " h), at the end) carry nothing over";
     result.notes.push_back(m.str());
   }
   if (wss_phase.beats(0) > 0 && !control.output_directory().empty()) {

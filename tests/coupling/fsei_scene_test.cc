@@ -420,6 +420,10 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   // The plane's carry-over exclusion beyond its range [0, 4] cells.
   const std::string ring = parse_error_of("fsi", {{"fsei", {{"forcing_carry_over_exclusion_plane_cells", 5}}}});
   EXPECT_NE(ring.find("fsei.forcing_carry_over_exclusion_plane_cells"), std::string::npos) << ring;
+  const std::string wall_ring =
+      parse_error_of("fsi", {{"fsei", {{"forcing_carry_over_exclusion_plane_wall_cells", -0.5}}}});
+  EXPECT_NE(wall_ring.find("fsei.forcing_carry_over_exclusion_plane_wall_cells"), std::string::npos) << wall_ring;
+  EXPECT_NE(wall_ring.find("-0.5"), std::string::npos) << wall_ring;
 }
 
 // Scene fsi's prescribed tension: the LA's peak is its fraction of the LV's (ours; the default

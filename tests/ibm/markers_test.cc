@@ -3,6 +3,8 @@
 // coarser than the grid, inverted normals).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -139,6 +141,59 @@ TEST(CarryOverExclusion, ARigidBodyCanHaveAWiderRing) {
   EXPECT_GT(brute_force(0, 3), 0u);
   ForcingParameters bad;
   bad.carry_over_exclusion_rigid_cells = -1;
+  EXPECT_THROW(validate(bad), InputError);
+}
+
+// carry_over_exclusion_rigid_wall_cells (ours): a pair of a rigid body's marker and a one-sided
+// deformable body's (a wall) excludes within the widest radius; a two-sided deformable body (a
+// leaflet) keeps the rigid ring, other pairs the pairs' radius: exactly those, by brute force.
+// A wall and a leaflet one h apart, the rigid sphere at the same distance from both.
+TEST(CarryOverExclusion, AWallCanHaveAWiderRingThanALeafletNextToARigidBody) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
+  Markers m(kGrid);
+  BodyOptions leaflet = deformable_options();
+  leaflet.sides = Sides::two;
+  m.add_body(sphere_mesh(Vec3(12, 24, 24), 6, 2), "wall", deformable_options());
+  m.add_body(sphere_mesh(Vec3(26.4, 24, 24), 6, 2), "leaflet", leaflet);
+  m.add_body(sphere_mesh(Vec3(19.2, 38, 24), 6, 2), "rigid", unit_options());
+  const auto& a = m.markers();
+  // per body of the excluded markers, by brute force
+  auto brute_force = [&](double pair_cells, double rigid_cells, double wall_cells) {
+    std::array<std::size_t, 3> near{0, 0, 0};
+    for (std::size_t i = 0; i < a.size(); ++i)
+      for (std::size_t j = 0; j < a.size(); ++j) {
+        const bool rigid_pair = a.body[i] == 2 || a.body[j] == 2,
+                   wall_pair = rigid_pair && (a.body[i] == 0 || a.body[j] == 0);
+        const double cells = wall_pair    ? std::max({pair_cells, rigid_cells, wall_cells})
+                             : rigid_pair ? std::max(pair_cells, rigid_cells)
+                                          : pair_cells;
+        if (a.body[i] != a.body[j] && (a.position[i] - a.position[j]).norm() < cells * m.h()) {
+          ++near[static_cast<std::size_t>(a.body[i])];
+          break;
+        }
+      }
+    return near;
+  };
+  auto total = [](const std::array<std::size_t, 3>& n) { return n[0] + n[1] + n[2]; };
+  for (const auto& [rigid_cells, wall_cells] : {std::pair{0.0, 0.0}, {0.0, 3.0}, {2.0, 3.0}, {3.0, 2.0}}) {
+    ForcingParameters p;
+    p.carry_over = true;
+    p.carry_over_exclusion_cells = 1.5;
+    p.carry_over_exclusion_rigid_cells = rigid_cells;
+    p.carry_over_exclusion_rigid_wall_cells = wall_cells;
+    EXPECT_EQ(DirectForcing(slabs, m, p).carry_over_excluded(), total(brute_force(1.5, rigid_cells, wall_cells)))
+        << rigid_cells << " " << wall_cells;
+  }
+  // pairs at 1.5 h, the rigid ring at 2 h; the walls' at 3 h or as the other rigid pairs'
+  const auto as_any = brute_force(1.5, 2, 0), walls = brute_force(1.5, 2, 3);
+  std::printf("  [measured] excluded (wall, leaflet, rigid) with a 2-h rigid ring: %zu %zu %zu; walls at 3 h: %zu %zu %zu\n",
+              as_any[0], as_any[1], as_any[2], walls[0], walls[1], walls[2]);
+  EXPECT_GT(as_any[1], 0u);
+  EXPECT_GT(walls[0], as_any[0]);  // the wall's ring reaches further
+  EXPECT_EQ(walls[1], as_any[1]);  // the leaflet's does not
+  EXPECT_GT(walls[2], as_any[2]);  // the rigid body's markers next to the wall too
+  ForcingParameters bad;
+  bad.carry_over_exclusion_rigid_wall_cells = 4.5;
   EXPECT_THROW(validate(bad), InputError);
 }
 
