@@ -58,6 +58,21 @@ DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, F
   update_carry_mask();
 }
 
+DirectForcing::ExclusionRadii DirectForcing::carry_over_exclusion_radii() const {
+  ExclusionRadii r;
+  r.pair_cells = par_.carry_over_exclusion_cells;
+  r.rigid_cells = std::max(par_.carry_over_exclusion_rigid_cells, r.pair_cells);
+  r.rigid_wall_cells = std::max(par_.carry_over_exclusion_rigid_wall_cells, r.rigid_cells);
+  return r;
+}
+
+bool DirectForcing::carries_over(std::size_t marker) const {
+  if (marker >= markers_.size())
+    throw std::out_of_range("DirectForcing::carries_over: marker " + std::to_string(marker) + " of " +
+                            std::to_string(markers_.size()));
+  return carries_.empty() || carries_[marker] != 0;
+}
+
 // A counting sort of the markers into cells of size r h over the box (grid units; markers lie
 // inside it, Markers checks that); a marker is excluded when a marker of another body lies
 // within r h (the 27 neighbouring cells checked). O(markers + cells); the box is not wrapped
@@ -72,9 +87,9 @@ void DirectForcing::update_carry_mask() {
   // The exclusion radius of a pair by the bodies' kinds: 0 a two-sided deformable body (a
   // leaflet), 1 a one-sided deformable body (a wall), 2 a rigid body; kind per body computed
   // once here, not in the pair loop.
-  const double r_pair = par_.carry_over_exclusion_cells * markers_.h(),
-               r_rigid = std::max(par_.carry_over_exclusion_rigid_cells * markers_.h(), r_pair),
-               r_wall = std::max(par_.carry_over_exclusion_rigid_wall_cells * markers_.h(), r_rigid);
+  const ExclusionRadii radii = carry_over_exclusion_radii();
+  const double r_pair = radii.pair_cells * markers_.h(), r_rigid = radii.rigid_cells * markers_.h(),
+               r_wall = radii.rigid_wall_cells * markers_.h();
   if (!par_.carry_over || r_wall <= 0) return;
   const MarkerArrays& m = markers_.markers();
   const std::size_t n = m.size();

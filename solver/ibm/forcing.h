@@ -99,6 +99,16 @@ class DirectForcing {
   }
   // Markers excluded from the carry-over (carry_over_exclusion_cells) at the last update.
   std::size_t carry_over_excluded() const { return excluded_; }
+  // Whether marker (an index of the markers, < their count; std::out_of_range otherwise) carried
+  // its force over at the last update: true for all when the carry-over excludes none.
+  bool carries_over(std::size_t marker) const;
+  // The exclusion radii in cells (h) the carry mask applies, by pair: any two deformable bodies;
+  // a rigid body with a two-sided one (a leaflet) or with another rigid body; a rigid body with a
+  // one-sided one (a wall). Each is the widest of the parameters that apply to the pair.
+  struct ExclusionRadii {
+    double pair_cells = 0, rigid_cells = 0, rigid_wall_cells = 0;
+  };
+  ExclusionRadii carry_over_exclusion_radii() const;
 
   // Slip of a velocity field (halos valid) at the active markers. Collective.
   SlipStats slip(const ConstVelocityView& u) const;

@@ -1653,14 +1653,12 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     for (const auto& b : markers.bodies()) m << " " << b.name << " m=" << b.tiling_level << " " << b.marker_count << ";";
     result.notes.push_back(m.str());
   }
-  const double plane_ring_cells =
-      std::max(forcing_parameters.carry_over_exclusion_cells, forcing_parameters.carry_over_exclusion_rigid_cells);
-  const double wall_plane_ring_cells = std::max(plane_ring_cells, forcing_parameters.carry_over_exclusion_rigid_wall_cells);
-  if (forcing_parameters.carry_over && wall_plane_ring_cells > 0) {
+  const ibm::DirectForcing::ExclusionRadii rings = forcing.carry_over_exclusion_radii();
+  if (forcing_parameters.carry_over && rings.rigid_wall_cells > 0) {
     std::ostringstream m;
     m << "carry-over forcing: " << forcing.carry_over_excluded() << " of " << markers.size() << " markers (those within "
-      << forcing_parameters.carry_over_exclusion_cells << " h of another body's, " << plane_ring_cells
-      << " h of the plane's (walls: " << wall_plane_ring_cells << " h), at the end) carry nothing over";
+      << rings.pair_cells << " h of another body's, " << rings.rigid_cells << " h of the plane's (walls: "
+      << rings.rigid_wall_cells << " h), at the end) carry nothing over";
     result.notes.push_back(m.str());
   }
   if (wss_phase.beats(0) > 0 && !control.output_directory().empty()) {

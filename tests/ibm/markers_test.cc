@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "solver/core/errors.h"
 #include "solver/ibm/forcing.h"
@@ -181,8 +182,26 @@ TEST(CarryOverExclusion, AWallCanHaveAWiderRingThanALeafletNextToARigidBody) {
     p.carry_over_exclusion_cells = 1.5;
     p.carry_over_exclusion_rigid_cells = rigid_cells;
     p.carry_over_exclusion_rigid_wall_cells = wall_cells;
-    EXPECT_EQ(DirectForcing(slabs, m, p).carry_over_excluded(), total(brute_force(1.5, rigid_cells, wall_cells)))
-        << rigid_cells << " " << wall_cells;
+    const DirectForcing forcing(slabs, m, p);
+    const auto expected = brute_force(1.5, rigid_cells, wall_cells);
+    EXPECT_EQ(forcing.carry_over_excluded(), total(expected)) << rigid_cells << " " << wall_cells;
+    // per body, the code's mask against the brute force's
+    std::array<std::size_t, 3> excluded{0, 0, 0};
+    for (std::size_t q = 0; q < a.size(); ++q)
+      if (!forcing.carries_over(q)) ++excluded[static_cast<std::size_t>(a.body[q])];
+    for (std::size_t b = 0; b < 3; ++b) EXPECT_EQ(excluded[b], expected[b]) << rigid_cells << " " << wall_cells << " body " << b;
+    // the radii the mask applied: each the widest parameter for its pair
+    const auto radii = forcing.carry_over_exclusion_radii();
+    EXPECT_EQ(radii.pair_cells, 1.5);
+    EXPECT_EQ(radii.rigid_cells, std::max(1.5, rigid_cells));
+    EXPECT_EQ(radii.rigid_wall_cells, std::max({1.5, rigid_cells, wall_cells}));
+  }
+  {
+    ForcingParameters p;
+    p.carry_over = true;
+    p.carry_over_exclusion_cells = 1.5;
+    const DirectForcing forcing(slabs, m, p);
+    EXPECT_THROW(forcing.carries_over(a.size()), std::out_of_range);
   }
   // pairs at 1.5 h, the rigid ring at 2 h; the walls' at 3 h or as the other rigid pairs'
   const auto as_any = brute_force(1.5, 2, 0), walls = brute_force(1.5, 2, 3);
