@@ -5,7 +5,8 @@
 // out=DIR: the output directory: the result files (result.h5, metrics.json, time_series.csv, ...)
 // at the end, field frames with fsei.field_interval_ms > 0 or outputs.field_phases.
 // checkpoint=DIR: checkpoints every fsei.checkpoint_interval_ms into DIR, and a resume from
-// the one found there (docs/fsei.md, "Checkpoint and restart").
+// the one found there (docs/fsei.md, "Checkpoint and restart"); with out=DIR, each checkpoint
+// also rewrites DIR/time_series.partial.csv (the series so far, for fsei_beats while it runs).
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -32,6 +33,18 @@ class Printer final : public systole::scene::RunControl {
     std::fflush(stderr);
   }
   bool cancel_requested() override { return false; }
+  // A running job's series (rank 0, out=DIR only): rewritten at each checkpoint as
+  // DIR/time_series.partial.csv, for bench/coupling/fsei_beats; removed when the run ends with its
+  // results (time_series.csv), left for a run that stops. A failed write is reported, not fatal.
+  void on_checkpoint(const systole::RunResult& so_far) override {
+    if (rank_ != 0 || out_.empty() || so_far.series.empty()) return;
+    try {
+      systole::io::write_time_series_csv(partial_series_file(), so_far);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "fsei_case: warning: %s not written: %s\n", partial_series_file().c_str(), e.what());
+    }
+  }
+  std::filesystem::path partial_series_file() const { return out_ / "time_series.partial.csv"; }
 
  private:
   int rank_;
@@ -82,6 +95,8 @@ int main(int argc, char** argv) {
       if (!out.empty())
         for (const auto& f : systole::io::write_results(out, r, {systole::config::to_json(s).dump(), ""}))
           std::printf("wrote %s\n", f.c_str());
+      std::error_code ignored;  // none written (no checkpoint) is fine
+      if (!out.empty()) std::filesystem::remove(control.partial_series_file(), ignored);
     }
   } catch (const std::exception& e) {
     if (rank == 0) std::fprintf(stderr, "fsei_case: %s\n", e.what());

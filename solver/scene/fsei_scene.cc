@@ -1276,6 +1276,40 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
       {"aorta_wall_slip", &aorta_wall_slip},   {"plane_slip", &plane_slip},
       {"q_out", &q_out},                       {"p_desc", &p_desc},
       {"ke_heart", &ke_heart}};
+  // The series sampled so far, named with their units: the result's at the end, and what
+  // RunControl::on_checkpoint gets at each checkpoint (a running job's series).
+  auto named_series = [&] {
+    std::vector<Series> out;
+    auto add = [&](const std::string& name, const std::string& unit, const std::vector<double>& v) {
+      out.push_back({name, unit, v});
+    };
+    std::vector<double> t_s(t_ms.size());
+    for (std::size_t i = 0; i < t_ms.size(); ++i) t_s[i] = 1e-3 * t_ms[i];
+    add("time_s", "s", t_s);
+    add("lv_pressure_mmhg", "mmHg", p_lv);
+    add("la_pressure_mmhg", "mmHg", p_la);
+    add("aortic_root_pressure_mmhg", "mmHg", p_ao);
+    add("lv_volume_ml", "ml", v_lv);
+    add("la_volume_ml", "ml", v_la);
+    add("aortic_flow_ml_s", "ml/s", q_ao);
+    add("mitral_flow_ml_s", "ml/s", q_mi);
+    add("kinetic_energy_mj", "mJ", ke);
+    if (heart_ke_series) add("heart_kinetic_energy_mj", "mJ", ke_heart);
+    add("lv_twist_deg", "deg", twist);
+    add("lv_longitudinal_strain", "", gls);
+    add("lv_circumferential_strain", "", gcs);
+    add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
+    add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
+    if (wall_slip_series) {
+      add("lv_wall_slip_flux_ml_s", "ml/s", lv_wall_slip);
+      add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
+      add("valvular_plane_slip_flux_ml_s", "ml/s", plane_slip);
+    }
+    if (outlet_series) add("aortic_outlet_flow_ml_s", "ml/s", q_out);
+    if (desc_series) add("descending_aorta_pressure_mmhg", "mmHg", p_desc);
+    add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
+    return out;
+  };
   double t = 0;
   set_caps(0);
   set_mitral_limiter(0);
@@ -1379,6 +1413,9 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
     if (!ok) throw std::runtime_error("fsei checkpoint at t = " + std::to_string(t) + " ms: " + error);
     dir.publish();
     ++checkpoints_written;
+    RunResult so_far;
+    so_far.series = named_series();
+    control.on_checkpoint(so_far);
   };
   const double dt_sample = s.outputs.time_series_interval_ms;
   try {
@@ -1594,34 +1631,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   M["ep_wall_s"] = with_ep ? st.modules[0].wall_time_s : 0.0;
   M["fluid_wall_s"] = st.modules[fluid_stage].wall_time_s;
   M["structure_wall_s"] = st.modules[structure_stage].wall_time_s;
-  auto add = [&](const std::string& name, const std::string& unit, std::vector<double> v) {
-    result.series.push_back({name, unit, std::move(v)});
-  };
-  std::vector<double> t_s(t_ms.size());
-  for (std::size_t i = 0; i < t_ms.size(); ++i) t_s[i] = 1e-3 * t_ms[i];
-  add("time_s", "s", t_s);
-  add("lv_pressure_mmhg", "mmHg", p_lv);
-  add("la_pressure_mmhg", "mmHg", p_la);
-  add("aortic_root_pressure_mmhg", "mmHg", p_ao);
-  add("lv_volume_ml", "ml", v_lv);
-  add("la_volume_ml", "ml", v_la);
-  add("aortic_flow_ml_s", "ml/s", q_ao);
-  add("mitral_flow_ml_s", "ml/s", q_mi);
-  add("kinetic_energy_mj", "mJ", ke);
-  if (heart_ke_series) add("heart_kinetic_energy_mj", "mJ", ke_heart);
-  add("lv_twist_deg", "deg", twist);
-  add("lv_longitudinal_strain", "", gls);
-  add("lv_circumferential_strain", "", gcs);
-  add("mitral_tip_velocity_m_s", "m/s", u_mitral_tips);
-  add("aortic_tip_velocity_m_s", "m/s", u_aortic_tips);
-  if (wall_slip_series) {
-    add("lv_wall_slip_flux_ml_s", "ml/s", lv_wall_slip);
-    add("aorta_wall_slip_flux_ml_s", "ml/s", aorta_wall_slip);
-    add("valvular_plane_slip_flux_ml_s", "ml/s", plane_slip);
-  }
-  if (outlet_series) add("aortic_outlet_flow_ml_s", "ml/s", q_out);
-  if (desc_series) add("descending_aorta_pressure_mmhg", "mmHg", p_desc);
-  add("aortic_cusps_wss_max_pa", "Pa", wss_cusps);
+  result.series = named_series();
   {
     std::vector<std::map<std::string, double>> beats = fsei_beat_metrics(result.series, period_ms, s.fluid.density_kg_per_m3, s.scene);
     M["beats_completed"] = static_cast<double>(beats.size());

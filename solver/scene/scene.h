@@ -33,6 +33,12 @@ class RunControl {
   // checkpoint found there and writes new ones into it (fsei.checkpoint_interval_ms). The same
   // path on every rank. Empty (the default): no checkpoints.
   virtual std::filesystem::path checkpoint_directory() { return {}; }
+  // Called on every rank, at the same points, after each checkpoint a scene writes (fsi, fsei):
+  // `so_far` holds the series sampled from t = 0 to the checkpoint's time, as the finished run's
+  // result would name them, and nothing else (no metrics: the run is not over). How a running
+  // job's series is read (bench/coupling/fsei_case writes it as time_series.partial.csv). An
+  // exception thrown here stops the run. Default: nothing.
+  virtual void on_checkpoint(const RunResult& so_far) { (void)so_far; }
 };
 
 // Thrown by run() when RunControl::cancel_requested() said so; nothing is reported.

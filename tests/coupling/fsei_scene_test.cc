@@ -1091,6 +1091,48 @@ TEST(FseiScene, CheckpointsResumeTheSameScenarioAndRefuseAnother) {
   std::filesystem::remove_all(dir);
 }
 
+// RunControl::on_checkpoint: after each checkpoint (not at the run's end) the caller gets the
+// series from t = 0 to the checkpoint's time, named as the finished run's, each a bitwise prefix
+// of the finished run's series (how a running job's series is read, fsei_case's
+// time_series.partial.csv).
+TEST(FseiScene, EachCheckpointHandsTheSeriesSoFarToTheCaller) {
+  const auto dir = fresh_directory("checkpoint_series");
+  class Recorder final : public RunControl {
+   public:
+    explicit Recorder(std::filesystem::path checkpoint) : checkpoint_(std::move(checkpoint)) {}
+    void on_progress(const ProgressReport&) override {}
+    bool cancel_requested() override { return false; }
+    std::filesystem::path checkpoint_directory() override { return checkpoint_; }
+    void on_checkpoint(const RunResult& so_far) override {
+      EXPECT_TRUE(so_far.metrics.empty());
+      calls.push_back(so_far.series);
+    }
+    std::vector<std::vector<Series>> calls;
+
+   private:
+    std::filesystem::path checkpoint_;
+  } control(dir);
+  const nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.3}, {"checkpoint_interval_ms", 0.1}}},
+                              {"outputs", {{"time_series_interval_ms", 0.1}}}};
+  const RunResult done = run_fsei(seed_scenario("fsi", doc), control);
+  ASSERT_EQ(control.calls.size(), 2u);  // at 0.1 and 0.2 ms; none at the end (0.3 ms)
+  for (std::size_t c = 0; c < control.calls.size(); ++c) {
+    const std::vector<Series>& so_far = control.calls[c];
+    ASSERT_EQ(so_far.size(), done.series.size()) << "call " << c;
+    ASSERT_EQ(so_far.front().name, "time_s");
+    ASSERT_EQ(so_far.front().values.size(), c + 2) << "samples 0 .. " << c + 1 << " x 0.1 ms";
+    EXPECT_NEAR(so_far.front().values.back(), 1e-4 * static_cast<double>(c + 1), 1e-12);
+    for (std::size_t k = 0; k < so_far.size(); ++k) {
+      EXPECT_EQ(so_far[k].name, done.series[k].name);
+      EXPECT_EQ(so_far[k].unit, done.series[k].unit);
+      ASSERT_EQ(so_far[k].values.size(), c + 2) << so_far[k].name;
+      for (std::size_t i = 0; i < so_far[k].values.size(); ++i)
+        EXPECT_EQ(so_far[k].values[i], done.series[k].values[i]) << so_far[k].name << " sample " << i;
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // A checkpoint written while the strain limit was still part of the fingerprint (before session
 // 15) carries its line; a parameter no longer fingerprinted is skipped, the others still count.
 TEST(FseiScene, ACheckpointsFingerprintSkipsParametersNoLongerFingerprinted) {
