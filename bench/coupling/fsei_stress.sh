@@ -3,8 +3,9 @@
 # calibrated setting, `coarse`) from t = 0 to END_PHASE of a beat (default 0.4: through the
 # ejection to the aortic valve's closure) over heart rate x tissue stiffness (every Fung c
 # scaled) x the fluid's step (its CFL target scaled: at the defaults the coupling interval is one
-# fluid step, so x m of the automatic step = fluid.cfl 0.2 m; x8 = 1.6 is past the CFL's hard
-# limit 1 and is refused at input, which the table shows). Runs go PARALLEL at a time, one rank
+# fluid step, so x m of the automatic step = fluid.cfl BASE_CFL m; BASE_CFL is the calibrated
+# default's 0.4 since session 42 (0.2 before: the older tables' x m is this x m/2); a CFL past
+# the hard limit 1 is refused at input, which the table shows). Runs go PARALLEL at a time, one rank
 # each. Each run must either complete with finite metrics or stop with a diagnosis naming the
 # module, the place and the time; anything else (a crash, a NaN metric, a hang past TIMEOUT_S) is
 # marked BAD. A step level cN instead scales the coupling step: N of the fluid's stable steps (at
@@ -16,12 +17,13 @@
 # another base. EXTRA adds path=value settings to every run; RATES, STIFFNESS
 # and STEPS choose the levels of the full factorial design, or DESIGN lists the runs of a reduced
 # one as heart_rate:stiffness:step triples (e.g. DESIGN="40:4:1 180:0.5:1"), longest first.
-#   [END_PHASE=0.4] [RATES="40 70 180"] [STIFFNESS="0.5 1 4"] [STEPS="1 2 4 8"] [DESIGN=...]
+#   [END_PHASE=0.4] [RATES="40 70 180"] [STIFFNESS="0.5 1 4"] [STEPS="0.5 1 2 4"] [DESIGN=...] [BASE_CFL=0.4]
 #   [PARALLEL=2] [LOGS=DIR (keep each run's N.err samples, N.out metrics and N.row table row)]
 #   bench/coupling/fsei_stress.sh [build/bin/fsei_case] > table.md
 set -u
 exe=${1:-build/bin/fsei_case}
 end_phase=${END_PHASE:-0.4}
+base_cfl=${BASE_CFL:-0.4}  # the automatic step's CFL: the calibrated default fluid.cfl
 timeout_s=${TIMEOUT_S:-14400}
 if [ -n "${LOGS:-}" ]; then  # keep each run's samples (N.err) and metrics (N.out) there
   mkdir -p "$LOGS" && work=$(cd "$LOGS" && pwd)
@@ -39,7 +41,7 @@ run_one() {
       "fsei.sync_step_ms=$(awk -v n="${m#c}" 'BEGIN { printf "%g", 0.1 * n }')")
     step_label="coupling x${m#c} (${m#c} fluid steps per interval, CFL 0.2)"
   else
-    cfl=$(awk -v m="$m" 'BEGIN { printf "%g", 0.2 * m }')
+    cfl=$(awk -v m="$m" -v b="$base_cfl" 'BEGIN { printf "%g", b * m }')
     step_args=("fluid.cfl=$cfl")
     step_label="x$m (CFL $cfl)"
   fi
@@ -80,7 +82,7 @@ run_one() {
   echo "$row" > "$work/$id.row"  # the run's row as soon as it ends (the table below is sorted at the end)
 }
 export -f run_one
-export exe end_phase timeout_s work EXTRA C_LV C_LA C_LEAFLETS C_AORTA
+export exe end_phase base_cfl timeout_s work EXTRA C_LV C_LA C_LEAFLETS C_AORTA
 echo "| heart rate (bpm) | stiffness | step | last sample (ms) | outcome | wall |"
 echo "|---|---|---|---|---|---|"
 design() {  # one "heart_rate stiffness step id" line per run
@@ -88,7 +90,7 @@ design() {  # one "heart_rate stiffness step id" line per run
   if [ -n "${DESIGN:-}" ]; then
     for t in $DESIGN; do id=$((id + 1)); echo "${t//:/ } $id"; done
   else
-    for hr in ${RATES:-40 70 180}; do for k in ${STIFFNESS:-0.5 1 4}; do for m in ${STEPS:-1 2 4 8}; do
+    for hr in ${RATES:-40 70 180}; do for k in ${STIFFNESS:-0.5 1 4}; do for m in ${STEPS:-0.5 1 2 4}; do
       id=$((id + 1)); echo "$hr $k $m $id"
     done; done; done
   fi
