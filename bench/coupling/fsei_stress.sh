@@ -34,7 +34,7 @@ fi
 run_one() {
   local hr=$1 k=$2 m=$3 id=$4
   local cfl end_ms step_args step_label
-  end_ms=$(awk -v p="$end_phase" -v hr="$hr" 'BEGIN { printf "%.6g", p * 60000 / hr }')
+  end_ms=$(awk -v p="$end_phase" -v hr="$hr" 'BEGIN { printf "%.10g", p * 60000 / hr }')  # 10 digits: END_PHASE=1 is a whole beat
   if [[ $m == c* ]]; then  # the coupling step: cN = N fluid steps (each at CFL 0.2) per interval
     cfl=0.2
     step_args=("fluid.cfl=$cfl" "fsei.fluid_steps_per_interval=${m#c}"
