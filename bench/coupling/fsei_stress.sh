@@ -9,7 +9,7 @@
 # each. Each run must either complete with finite metrics or stop with a diagnosis naming the
 # module, the place and the time; anything else (a crash, a NaN metric, a hang past TIMEOUT_S) is
 # marked BAD. A step level cN instead scales the coupling step: N of the fluid's stable steps (at
-# CFL 0.2) per synchronisation interval (fsei.fluid_steps_per_interval, 1..8; the intervals' cap
+# CFL BASE_CFL since session 43; at CFL 0.2 before, the older tables' cN) per synchronisation interval (fsei.fluid_steps_per_interval, 1..8; the intervals' cap
 # fsei.sync_step_ms raised N-fold from 0.1 ms with it, as the fluid's 0.1 ms), so the shells and
 # the loads see the fluid N times less often (the multirate coupling's added-mass limit). The
 # stiffness factor scales each tissue's Fung c from its value at the defaults (the table's, the
@@ -35,11 +35,11 @@ run_one() {
   local hr=$1 k=$2 m=$3 id=$4
   local cfl end_ms step_args step_label
   end_ms=$(awk -v p="$end_phase" -v hr="$hr" 'BEGIN { printf "%.10g", p * 60000 / hr }')  # 10 digits: END_PHASE=1 is a whole beat
-  if [[ $m == c* ]]; then  # the coupling step: cN = N fluid steps (each at CFL 0.2) per interval
-    cfl=0.2
+  if [[ $m == c* ]]; then  # the coupling step: cN = N fluid steps (each at CFL BASE_CFL) per interval
+    cfl=$base_cfl
     step_args=("fluid.cfl=$cfl" "fsei.fluid_steps_per_interval=${m#c}"
       "fsei.sync_step_ms=$(awk -v n="${m#c}" 'BEGIN { printf "%g", 0.1 * n }')")
-    step_label="coupling x${m#c} (${m#c} fluid steps per interval, CFL 0.2)"
+    step_label="coupling x${m#c} (${m#c} fluid steps per interval, CFL $cfl)"
   else
     cfl=$(awk -v m="$m" -v b="$base_cfl" 'BEGIN { printf "%g", b * m }')
     step_args=("fluid.cfl=$cfl")

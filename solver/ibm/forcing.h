@@ -75,9 +75,8 @@ struct SlipStats {
 };
 
 struct ForcingReport {
-  SlipStats slip_before;        // of û (what the forcing corrects)
-  SlipStats slip_after;         // of û + Δt f after the last pass, before the projection
-                                // (measured only when iterations > 1; else markers = 0)
+  SlipStats slip_before;        // of û (what the forcing corrects); the slip after the last
+                                // pass is not measured (it would cost an interpolation)
   Vec3 total_force = Vec3::Zero();  // Σ_b F_b ΔV_b: the force on the fluid (the body feels −it)
   int iterations = 0;
 };
