@@ -1489,6 +1489,21 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
           for (const Vec3& v : group.body(b).velocities_mm_per_ms())
             if (v.norm() > v_max) v_max = v.norm(), v_body = group.body(b).name();
         m << " fastest_node_m_s " << v_max << " in " << v_body;
+        // and the largest carried-over force (the forcing's integral state, m/s²: what winds up
+        // where the slip cannot be removed), its body, place and whether it carries (ours,
+        // session 43: docs/fsei.md's analysis of the 1-h exclusion at small steps)
+        const std::vector<Vec3>& carried = forcing.carried_force();
+        if (!carried.empty()) {
+          std::size_t b_max = 0;
+          double f_max = -1;
+          for (std::size_t b = 0; b < carried.size(); ++b)
+            if (carried[b].squaredNorm() > f_max) f_max = carried[b].squaredNorm(), b_max = b;
+          const ibm::MarkerArrays& ma = markers.markers();
+          const Vec3 x_mm = ma.position[b_max] * fp.length_scale_mm;
+          m << " carried_force_max_m_s2 " << std::sqrt(f_max) * m_s / fp.time_scale_s << " in "
+            << markers.bodies()[static_cast<std::size_t>(ma.body[b_max])].name << " at (" << x_mm.x() << ", "
+            << x_mm.y() << ", " << x_mm.z() << ") mm " << (forcing.carries_over(b_max) ? "carrying" : "excluded");
+        }
       }
       if (fs.strong_coupling) {  // how the iterations fare so far (a run that stops reports no metrics)
         const coupling::SchedulerStats& cs = scheduler.stats();

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -1131,6 +1132,44 @@ TEST(FseiScene, EachCheckpointHandsTheSeriesSoFarToTheCaller) {
     }
   }
   std::filesystem::remove_all(dir);
+}
+
+// Each progress sample names the largest carried-over force (m/s²), its body, its place and whether
+// its marker carries, when the forcing carries its force over (the calibrated defaults), and
+// says nothing of it when it does not (docs/fsei.md, session 43).
+TEST(FseiScene, ProgressNamesTheLargestCarriedForceWhenTheForcingCarriesIt) {
+  class Messages final : public RunControl {
+   public:
+    void on_progress(const ProgressReport& r) override { all.push_back(r.message); }
+    bool cancel_requested() override { return false; }
+    std::vector<std::string> all;
+  };
+  const nlohmann::json doc = {{"fsei", {{"end_time_ms", 0.2}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}};
+  Messages carried;
+  (void)run_fsei(scenario("fsi", doc), carried);
+  ASSERT_EQ(carried.all.size(), 2u);  // the samples at 0.1 and 0.2 ms
+  const std::set<std::string> bodies = {"valvular_plane", "lv", "la", "pv_caps", "mitral_anterior", "mitral_posterior",
+                                        "aortic_cusp_1", "aortic_cusp_2", "aortic_cusp_3", "aorta"};
+  for (const std::string& m : carried.all) {
+    const std::size_t at = m.find(" carried_force_max_m_s2 ");
+    ASSERT_NE(at, std::string::npos) << m;
+    std::istringstream in(m.substr(at + std::string(" carried_force_max_m_s2 ").size()));
+    double f = 0;
+    std::string in_word, body, at_word;
+    in >> f >> in_word >> body >> at_word;
+    EXPECT_TRUE(std::isfinite(f) && f > 0) << m;
+    EXPECT_EQ(in_word, "in");
+    EXPECT_TRUE(bodies.count(body)) << body;
+    EXPECT_EQ(at_word, "at");
+    const std::string tail = m.substr(at);
+    EXPECT_TRUE(tail.find(" mm carrying") != std::string::npos || tail.find(" mm excluded") != std::string::npos) << m;
+  }
+  nlohmann::json off = doc;
+  off["fsei"]["forcing_carry_over"] = false;
+  Messages plain;
+  (void)run_fsei(scenario("fsi", off), plain);
+  ASSERT_EQ(plain.all.size(), 2u);
+  for (const std::string& m : plain.all) EXPECT_EQ(m.find("carried_force"), std::string::npos) << m;
 }
 
 // A checkpoint written while the strain limit was still part of the fingerprint (before session
