@@ -651,6 +651,13 @@ std::vector<Param> build_table() {
                            "markers carry no force over (ours); the leaflets and cusps keep the narrower ring, so "
                            "the closed valves' bases keep their hold; 0: the walls as any body. docs/fsei.md "
                            "sessions 39 and 40."));
+  t.push_back(SYSTOLE_BOOL(fsei.forcing_row_sum_scaling, false,
+                           "Scenes 'fsei'/'fsi': scale each immersed-boundary forcing pass's correction per marker "
+                           "by 1/max(r, 1/4), r the marker's row sum of interpolation after spreading (ours: a "
+                           "Jacobi-like preconditioning of the passes; r is about 0.5 on a lone body's markers "
+                           "and 1 where two bodies share a kernel support, so each pass removes about all of the "
+                           "smooth slip instead of half). Costs one spreading and one interpolation per step. "
+                           "docs/fsei.md session 44."));
   t.push_back(SYSTOLE_CHOICE(fsei.slab_split, "balanced", (std::vector<std::string_view>{"balanced", "uniform"}),
                              "Scenes 'fsei'/'fsi' on several MPI ranks: how the fluid's z planes are split over the "
                              "ranks: balanced (ours), by each plane's work, its cells plus the immersed boundary's "
