@@ -628,6 +628,13 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of the previous step's "
                            "immersed-boundary force carried over (ours; below 1 the carried force cannot wind up "
                            "where the forcing cannot remove the slip, at the price of some slip: docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_increment_share, "", 1, 0.01, 1,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of each step's "
+                           "immersed-boundary corrections that the carried force keeps (ours; the force applied "
+                           "in the step is unchanged). The carried force's gain per unit of time scales as this "
+                           "over the step squared, so a smaller step with this = its ratio to a reference step "
+                           "keeps that step's gain; a steady load is held as with 1, only more slowly. docs/fsei.md "
+                           "session 44."));
   t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_cells, "", 0, 0, 4,
                            "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: markers within this many grid "
                            "spacings of another body's markers carry no force over (ours; anti-windup where two "

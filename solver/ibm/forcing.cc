@@ -23,6 +23,11 @@ void validate(const ForcingParameters& p) {
     m << "ibm carry-over factor = " << p.carry_over_factor << " is out of range (0, 1]";
     throw InputError(m.str());
   }
+  if (!(p.carry_over_increment_share > 0 && p.carry_over_increment_share <= 1)) {
+    std::ostringstream m;
+    m << "ibm carry-over increment share = " << p.carry_over_increment_share << " is out of range (0, 1]";
+    throw InputError(m.str());
+  }
   if (!(p.carry_over_exclusion_cells >= 0 && p.carry_over_exclusion_cells <= 4)) {
     std::ostringstream m;
     m << "ibm carry-over exclusion = " << p.carry_over_exclusion_cells << " cells is out of range [0, 4]";
@@ -251,6 +256,8 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_}, U);
     for (Vec3& x : U) x += dt * uniform_force;
   }
+  const bool share_increments = par_.carry_over && par_.carry_over_increment_share < 1;
+  if (share_increments) start_ = force_;  // F_start (zero where nothing was carried)
   for (int pass = 0; pass < par_.iterations; ++pass) {
     for (std::size_t b = 0; b < n; ++b)
       increment_[b] = markers_.active(b) ? Vec3((m.velocity[b] - U[b]) / dt) : Vec3::Zero();
@@ -273,7 +280,14 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   Vec3 total = Vec3::Zero();
   for (std::size_t b = 0; b < n; ++b) total += force_[b] * markers_.forcing_volume(b);
   report_.total_force = total;
-  if (par_.carry_over) previous_ = force_;
+  if (share_increments) {
+    // The carried force keeps only the share w of this step's corrections.
+    previous_.resize(n);
+    const double w = par_.carry_over_increment_share;
+    for (std::size_t b = 0; b < n; ++b) previous_[b] = start_[b] + w * (force_[b] - start_[b]);
+  } else if (par_.carry_over) {
+    previous_ = force_;
+  }
   return report_;
 }
 

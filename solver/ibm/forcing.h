@@ -33,6 +33,14 @@ struct ForcingParameters {
   // one support) no longer winds the force up without bound (F ≤ correction / (1 − β)), at the
   // price of a steady slip (1 − β) times the one without carry-over.
   double carry_over_factor = 1.0;
+  // With carry_over: the share w of this step's corrections that the carried force keeps, (0, 1]
+  // (ours): the next step starts from β (F_start + w (F − F_start)), F_start the force this step
+  // started from; the force applied this step is F whatever w. The carried force's gain per unit
+  // of time is w/Δt² per slip: w = Δt/Δt_ref keeps the gain of the step Δt_ref at a smaller step
+  // (at CFL 0.2 three passes ran away where one pass completed: docs/fsei.md session 44). A steady
+  // load reaches the same carried force and slip as with w = 1, only more slowly
+  // (tests/ibm/forcing_test.cc).
+  double carry_over_increment_share = 1.0;
   // With carry_over: markers within this × h of a marker of another body carry nothing over
   // (ours), [0, 4]; 0: every marker carries. Anti-windup: where two bodies' supports overlap
   // (leaflets meeting at a commissure, a leaflet at its annulus) their targets can conflict, the
@@ -149,6 +157,7 @@ class DirectForcing {
   ForcingParameters par_;
   Transfer transfer_;
   std::vector<Vec3> force_, increment_, previous_, interpolated_, row_sum_;
+  std::vector<Vec3> start_;  // the force a step started from (carry_over_increment_share < 1)
   ForcingReport report_;
   std::vector<char> carries_;  // per marker: 1 = its force is carried over (empty: all)
   std::size_t excluded_ = 0;

@@ -752,6 +752,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   forcing_parameters.carry_over_exclusion_rigid_cells = fs.forcing_carry_over_exclusion_plane_cells;
   forcing_parameters.carry_over_exclusion_rigid_wall_cells = fs.forcing_carry_over_exclusion_plane_wall_cells;
   forcing_parameters.row_sum_scaling = fs.forcing_row_sum_scaling;
+  forcing_parameters.carry_over_increment_share = fs.forcing_carry_over_increment_share;
   forcing_parameters.iterations = fs.forcing_iterations;
   forcing_parameters.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
   forcing_parameters.kernel =
