@@ -631,10 +631,17 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_increment_share, "", 1, 0.01, 1,
                            "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of each step's "
                            "immersed-boundary corrections that the carried force keeps (ours; the force applied "
-                           "in the step is unchanged). The carried force's gain per unit of time scales as this "
-                           "over the step squared, so a smaller step with this = its ratio to a reference step "
-                           "keeps that step's gain; a steady load is held as with 1, only more slowly. docs/fsei.md "
-                           "session 44."));
+                           "in the step is unchanged). The carried force's error falls at a rate per unit of time "
+                           "that scales as this over the step, so a smaller step with this = its ratio to a "
+                           "reference step keeps that step's rate (fsei.forcing_carry_over_reference_cfl sets it "
+                           "per step); a steady load is held as with 1, only more slowly. docs/fsei.md session 44."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_reference_cfl, "", 0, 0, 1,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: 0 (off), or the CFL target whose "
+                           "step sets the carry-over's rate (ours): each fluid step multiplies "
+                           "fsei.forcing_carry_over_increment_share by min(1, the fluid's stable step at "
+                           "fluid.cfl / its stable step at this CFL), so the carried force's error falls at the "
+                           "reference step's rate per unit of time whatever fluid.cfl (1 where max_dt or the "
+                           "viscous bound sets both steps). docs/fsei.md session 45."));
   t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_cells, "", 0, 0, 4,
                            "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: markers within this many grid "
                            "spacings of another body's markers carry no force over (ours; anti-windup where two "

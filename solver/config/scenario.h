@@ -235,6 +235,7 @@ struct Fsei {
   double forcing_carry_over_exclusion_plane_wall_cells;  // ibm::ForcingParameters::carry_over_exclusion_rigid_wall_cells (ours)
   bool forcing_row_sum_scaling;         // ibm::ForcingParameters::row_sum_scaling (ours)
   double forcing_carry_over_increment_share;  // ibm::ForcingParameters::carry_over_increment_share (ours)
+  double forcing_carry_over_reference_cfl;  // coupling::FluidModuleOptions::carry_over_reference_cfl, 0: off (ours)
   double aortic_prestress_fraction;     // with "prestress": the wall's share of the ground pressure, the rest an outer load (ours)
   std::string slab_split;               // "balanced" | "uniform": grid::Slabs' z split over the ranks (ours)
   std::string sync_interval;            // "fixed" | "fluid_step": coupling::SchedulerOptions::interval_stage (ours)

@@ -1,5 +1,6 @@
 #include "solver/coupling/fluid_module.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -17,11 +18,22 @@ FluidModule::FluidModule(fluid::FluidSolver& fluid, ibm::Markers& markers, ibm::
   }
   if (!options_.uniform_force_density.allFinite())
     throw InputError("fluid module: uniform_force_density must be finite");
+  if (!(options_.carry_over_reference_cfl >= 0 && options_.carry_over_reference_cfl <= 1)) {
+    std::ostringstream m;
+    m << "fluid module: carry_over_reference_cfl = " << options_.carry_over_reference_cfl
+      << " is out of range [0, 1] (0: off; else the CFL target whose step sets the carry-over's rate)";
+    throw InputError(m.str());
+  }
   // The forcing of eq 3 (and the optional uniform driving force) is the fluid's body force.
   const grid::Slabs& slabs = fluid_.slabs();
   fluid_.set_body_force([this, &slabs](const fluid::StepContext& c, const fluid::Velocity& uh, fluid::Velocity& f) {
     const ibm::Vec3 g = options_.uniform_force_density;
-    forcing_.apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, g);
+    double share = 1;  // the step-aware increment share (options_.carry_over_reference_cfl)
+    if (options_.carry_over_reference_cfl > 0) {
+      const double ref = fluid_.step_at_cfl(options_.carry_over_reference_cfl);
+      share = std::min(1.0, fluid_.step_at_cfl(fluid_.parameters().cfl) / ref);
+    }
+    forcing_.apply(c.dt, {uh.u, uh.v, uh.w}, {f.u, f.v, f.w}, g, share);
     if (g.isZero()) return;
     const grid::Grid& grid = slabs.grid();
     for (int k = 0; k < f.u.k_count(); ++k) {

@@ -40,6 +40,13 @@ struct FluidModuleOptions {
   // (ours: a driving pressure gradient or gravity for verification; 0 in the heart scenes). The
   // markers see û + Δt g, so the forcing cancels it inside the bodies.
   ibm::Vec3 uniform_force_density = ibm::Vec3::Zero();
+  // The carry-over's step-aware increment share (ours), [0, 1]; 0: off. Each fluid step's forcing
+  // multiplies ibm::ForcingParameters::carry_over_increment_share by
+  // w = min(1, Δt(cfl) / Δt(carry_over_reference_cfl)), the two the fluid's stable steps from the
+  // step's state at its own CFL target and at this one (FluidSolver::step_at_cfl): the carried
+  // force's error then falls at the reference step's rate per unit of time whatever the CFL
+  // target, and where max_dt or the viscous bound sets both steps w = 1. docs/fsei.md session 45.
+  double carry_over_reference_cfl = 0;
 };
 
 class FluidModule final : public Module {

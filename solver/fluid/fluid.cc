@@ -147,16 +147,30 @@ void FluidSolver::set_pressure(const VelocityFunction& fp) {
   grid::exchange_halos(p_, slabs_);
 }
 
-double FluidSolver::choose_time_step(double t_limit) const {
+double FluidSolver::step_bound(double cfl) const {
   const grid::Grid& g = slabs_.grid();
   double dt = par_.max_dt;
+  if (!par_.adaptive_dt) return dt;
+  const double rate =
+      par_.cfl_rule == "per_cell" ? max_cell_rate_ : max_u_ / g.dx() + max_v_ / g.dy() + max_w_ / g.dz();
+  if (rate > 0) dt = std::min(dt, cfl / rate);
+  const double nu = max_viscosity();  // Carreau–Yasuda or a subgrid model: the field's largest ν
+  const double lam = 4 / (g.dx() * g.dx()) + 4 / (g.dy() * g.dy()) + 4 / (g.dz() * g.dz());
+  return std::min(dt, par_.viscous_safety / (nu * lam));
+}
+
+double FluidSolver::step_at_cfl(double cfl) const {
+  if (!(cfl > 0 && cfl <= 1)) {
+    std::ostringstream m;
+    m << "fluid: step_at_cfl(cfl = " << cfl << "): the CFL target must be in (0, 1]";
+    throw InputError(m.str());
+  }
+  return step_bound(cfl);
+}
+
+double FluidSolver::choose_time_step(double t_limit) const {
+  const double dt = step_bound(par_.cfl);
   if (par_.adaptive_dt) {
-    const double rate =
-        par_.cfl_rule == "per_cell" ? max_cell_rate_ : max_u_ / g.dx() + max_v_ / g.dy() + max_w_ / g.dz();
-    if (rate > 0) dt = std::min(dt, par_.cfl / rate);
-    const double nu = max_viscosity();  // Carreau–Yasuda or a subgrid model: the field's largest ν
-    const double lam = 4 / (g.dx() * g.dx()) + 4 / (g.dy() * g.dy()) + 4 / (g.dz() * g.dz());
-    dt = std::min(dt, par_.viscous_safety / (nu * lam));
     if (dt < par_.abort_min_dt) {
       std::ostringstream place, what;
       place << "step " << steps_ << ", fastest cell " << fastest_cell() << " (max |u|,|v|,|w| = " << max_u_ << ", "

@@ -154,6 +154,11 @@ class FluidSolver {
   // nondimensional. Carreau–Yasuda: with the largest ν of the last step (advance() updates ν
   // first, so its step can be smaller).
   double stable_step() const { return choose_time_step(1e300); }
+  // The step the CFL target cfl (in (0, 1]; InputError otherwise, naming it) would choose from
+  // the current state, with the same viscous bound and max_dt (ours: coupling::FluidModule's
+  // carry-over reference step). Without adaptive_dt: max_dt. Never stops the run (abort_min_dt is
+  // stable_step()'s check).
+  double step_at_cfl(double cfl) const;
   // Velocity, pressure and vorticity at cell centres (+ XDMF sidecar for ParaView), the ones
   // `which` selects. Collective.
   // Which fields, in which units: the values written are the nondimensional ones times the
@@ -192,6 +197,7 @@ class FluidSolver {
  private:
   void apply_velocity_boundary_conditions(Velocity& vel) const;
   double choose_time_step(double t_limit) const;
+  double step_bound(double cfl) const;  // min(max_dt, cfl / rate, the viscous bound); max_dt without adaptive_dt
   void compute_explicit_terms();                    // H = −∇·(uu) + Re⁻¹∇²u   (eq 1–2)
   template <bool kNewtonianViscous>
   void explicit_terms_kernel();                     // advection (+ Re⁻¹∇²u when Newtonian)

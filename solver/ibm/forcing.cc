@@ -225,7 +225,12 @@ void DirectForcing::update_row_sums() {
 }
 
 const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_hat, VelocityView f,
-                                          const Vec3& uniform_force) {
+                                          const Vec3& uniform_force, double increment_share_factor) {
+  if (!(increment_share_factor > 0 && increment_share_factor <= 1)) {
+    std::ostringstream m;
+    m << "ibm forcing: increment_share_factor = " << increment_share_factor << " is out of range (0, 1]";
+    throw InputError(m.str());
+  }
   const MarkerArrays& m = markers_.markers();
   const std::size_t n = m.size();
   if (par_.row_sum_scaling) update_row_sums();  // before increment_ is reset (it uses it)
@@ -256,7 +261,8 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_}, U);
     for (Vec3& x : U) x += dt * uniform_force;
   }
-  const bool share_increments = par_.carry_over && par_.carry_over_increment_share < 1;
+  const double w = par_.carry_over_increment_share * increment_share_factor;
+  const bool share_increments = par_.carry_over && w < 1;
   if (share_increments) start_ = force_;  // F_start (zero where nothing was carried)
   for (int pass = 0; pass < par_.iterations; ++pass) {
     for (std::size_t b = 0; b < n; ++b)
@@ -283,7 +289,6 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   if (share_increments) {
     // The carried force keeps only the share w of this step's corrections.
     previous_.resize(n);
-    const double w = par_.carry_over_increment_share;
     for (std::size_t b = 0; b < n; ++b) previous_[b] = start_[b] + w * (force_[b] - start_[b]);
   } else if (par_.carry_over) {
     previous_ = force_;

@@ -35,11 +35,12 @@ struct ForcingParameters {
   double carry_over_factor = 1.0;
   // With carry_over: the share w of this step's corrections that the carried force keeps, (0, 1]
   // (ours): the next step starts from β (F_start + w (F − F_start)), F_start the force this step
-  // started from; the force applied this step is F whatever w. The carried force's gain per unit
-  // of time is w/Δt² per slip: w = Δt/Δt_ref keeps the gain of the step Δt_ref at a smaller step
-  // (at CFL 0.2 three passes ran away where one pass completed: docs/fsei.md session 44). A steady
-  // load reaches the same carried force and slip as with w = 1, only more slowly
-  // (tests/ibm/forcing_test.cc).
+  // started from; the force applied this step is F whatever w. Once the passes' slip follows the
+  // carried force's error e (slip ≈ −Δt e / λ, λ the share of the slip the passes remove), e falls
+  // by 1 − w per step: at the rate w/Δt per unit of time, so w = Δt/Δt_ref keeps the rate of the
+  // step Δt_ref at a smaller step (at CFL 0.2 three passes ran away where one pass completed:
+  // docs/fsei.md sessions 44–45). A steady load reaches the same carried force and slip as with
+  // w = 1, only more slowly (tests/ibm/forcing_test.cc).
   double carry_over_increment_share = 1.0;
   // With carry_over: markers within this × h of a marker of another body carry nothing over
   // (ours), [0, 4]; 0: every marker carries. Anti-windup: where two bodies' supports overlap
@@ -108,8 +109,11 @@ class DirectForcing {
   // û with valid halos. Collective. Returns the report of this step. uniform_force: a uniform
   // force density g the caller adds to f as well (a driving force); its velocity Δt g is added
   // to the interpolated û (exact: Σφ = 1), so the markers see û + Δt g. Add g to f after apply().
+  // increment_share_factor, in (0, 1] (InputError otherwise): multiplies
+  // carry_over_increment_share for this step only (the caller's step-aware share:
+  // coupling::FluidModuleOptions::carry_over_reference_cfl); 1 leaves the parameter as it is.
   const ForcingReport& apply(double dt, const ConstVelocityView& u_hat, VelocityView f,
-                             const Vec3& uniform_force = Vec3::Zero());
+                             const Vec3& uniform_force = Vec3::Zero(), double increment_share_factor = 1.0);
   void markers_moved() {
     transfer_.rebuild();
     update_carry_mask();

@@ -760,6 +760,7 @@ RunResult run_fsei(const config::Scenario& s, RunControl& control) {
   ibm::DirectForcing forcing(slabs, markers, forcing_parameters);
   coupling::FluidModuleOptions fmo;
   fmo.time_scale_ms = kTimeScaleMs;
+  fmo.carry_over_reference_cfl = fs.forcing_carry_over_reference_cfl;
   coupling::FluidModule fluid_module(fluid, markers, forcing, fmo);
 
   // 5. the active tension on the LV and LA walls: nodes within passive_annulus_mm of the anchor

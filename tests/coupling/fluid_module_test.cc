@@ -5,8 +5,10 @@
 // body force, to round-off against its closed form for the discrete surface.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 #include "solver/core/errors.h"
 #include "solver/coupling/fluid_module.h"
@@ -36,15 +38,15 @@ struct ImmersedSphere {
     return p;
   }
   explicit ImmersedSphere(bool stream, Vec3 g_force = Vec3::Zero(), bool rigid = true,
-                          ibm::ForcingParameters forcing_parameters = {})
-      : fluid(slabs, parameters()) {
+                          ibm::ForcingParameters forcing_parameters = {}, FluidModuleOptions mo = {},
+                          fluid::FluidParameters fluid_parameters = parameters())
+      : fluid(slabs, fluid_parameters) {
     ibm::BodyOptions o;
     o.mm_per_unit = 1.0;
     o.normals = ibm::ExpectedNormals::outward;
     o.rigid = rigid;
     sphere = markers.add_body(ibm::sphere_mesh(Vec3(1, 1, 1), 0.4, 2), "sphere", o);
     forcing = std::make_unique<ibm::DirectForcing>(slabs, markers, forcing_parameters);
-    FluidModuleOptions mo;
     mo.uniform_force_density = g_force;
     module = std::make_unique<FluidModule>(fluid, markers, *forcing, mo);
     if (stream)
@@ -124,6 +126,55 @@ TEST_P(FluidModuleRestore, RepeatsAnIntervalBitwise) {
 }
 INSTANTIATE_TEST_SUITE_P(CarryOver, FluidModuleRestore, ::testing::Bool(),
                          [](const auto& info) { return info.param ? "carried_force" : "seed_forcing"; });
+
+// The carry-over's step-aware increment share (FluidModuleOptions::carry_over_reference_cfl):
+// at CFL 0.2 with the reference CFL 0.4 every CFL-limited step keeps w = 0.5 of its corrections,
+// so the run equals, bitwise, the one with the forcing's fixed share 0.5, and differs from the
+// plain carry-over; where max_dt sets both steps it is the plain carry-over, bitwise.
+TEST(FluidModule, TheReferenceCflSharesTheIncrementsByTheStepRatio) {
+  ibm::ForcingParameters carry;
+  carry.carry_over = true;
+  carry.iterations = 3;
+  ibm::ForcingParameters half = carry;
+  half.carry_over_increment_share = 0.5;
+  FluidModuleOptions ref;
+  ref.carry_over_reference_cfl = 0.4;
+  auto run = [](fluid::FluidParameters p, ibm::ForcingParameters f, FluidModuleOptions o) {
+    auto s = std::make_unique<ImmersedSphere>(true, Vec3::Zero(), true, f, o, p);
+    for (int n = 0; n < 6; ++n) s->module->step(s->module->max_step_ms());
+    return s;
+  };
+  fluid::FluidParameters cfl_limited = ImmersedSphere::parameters();
+  cfl_limited.cfl = 0.2;  // the stream's CFL step at 0.4 is max_dt 0.05, then below it
+  const auto a = run(cfl_limited, carry, ref), b = run(cfl_limited, half, {}), c = run(cfl_limited, carry, {});
+  ASSERT_LT(a->fluid.step_at_cfl(0.4), cfl_limited.max_dt);  // CFL-limited at both targets
+  EXPECT_TRUE(bitwise_equal(a->fluid, b->fluid));
+  EXPECT_EQ(a->forcing->carried_force(), b->forcing->carried_force());
+  EXPECT_FALSE(bitwise_equal(a->fluid, c->fluid));
+  EXPECT_NE(a->forcing->carried_force(), c->forcing->carried_force());
+
+  fluid::FluidParameters capped = cfl_limited;
+  capped.max_dt = 0.005;  // below the CFL step at 0.2 (≈ 0.02): both steps are max_dt
+  const auto d = run(capped, carry, ref), e = run(capped, carry, {});
+  ASSERT_EQ(d->fluid.step_at_cfl(0.2), capped.max_dt);
+  EXPECT_TRUE(bitwise_equal(d->fluid, e->fluid));
+  EXPECT_EQ(d->forcing->carried_force(), e->forcing->carried_force());
+}
+
+TEST(FluidModule, AReferenceCflOutsideZeroToOneIsAnInputError) {
+  ImmersedSphere a(false);
+  for (double bad : {-0.1, 1.2}) {
+    FluidModuleOptions o;
+    o.carry_over_reference_cfl = bad;
+    try {
+      FluidModule m(a.fluid, a.markers, *a.forcing, o);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("carry_over_reference_cfl = "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("[0, 1]"), std::string::npos) << e.what();
+    }
+  }
+}
 
 TEST(FluidModule, BodyNodesWrittenAsInputsMoveTheForcing) {
   // A deformable sphere in fluid at rest, given the velocity (0.5, 0, 0) at every node: after

@@ -2,6 +2,7 @@
 // stability detector, the Darcy sink, the body-force hook.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -328,6 +329,42 @@ TEST(FluidSolver, ThePerCellCflRuleSeesJetsInDifferentPlacesSeparately) {
     EXPECT_NE(std::string(e.what()).find("fluid.cfl_rule = 'local' is unknown; known: component_maxima, per_cell"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// step_at_cfl (coupling's carry-over reference step): the step another CFL target would choose
+// from the same state: the CFL step scales with the target, max_dt caps both, and a target
+// outside (0, 1] is an input error naming it.
+TEST(FluidSolver, TheStepAtAnotherCflScalesWithItUnderTheSameCap) {
+  const Slabs s(Grid({16, 16, 8, 2 * kPi, 2 * kPi, kPi}), MPI_COMM_WORLD);
+  FluidParameters p;
+  p.reynolds = 3000;
+  p.cfl = 0.2;
+  p.max_dt = 0.1;
+  p.bottom_wall.kind = p.top_wall.kind = WallKind::free_slip;
+  FluidSolver f(s, p);
+  const double a = 10;  // the CFL step at 0.2: 0.2 / (a (1/dx + 1/dy)) ≈ 0.0025, far below max_dt
+  f.set_velocity([a](double x, double y, double z) { return a * std::sin(x) * std::cos(y) * std::cos(z); },
+                 [a](double x, double y, double z) { return -a * std::cos(x) * std::sin(y) * std::cos(z); },
+                 [](double, double, double) { return 0.0; });
+  const double own = f.stable_step();
+  EXPECT_LT(own, 0.01);
+  EXPECT_EQ(f.step_at_cfl(0.2), own);
+  EXPECT_EQ(f.step_at_cfl(0.4), 2 * own);     // 0.4 and 0.2 share their mantissa: exact
+  EXPECT_EQ(f.step_at_cfl(0.1), 0.5 * own);
+  EXPECT_DOUBLE_EQ(f.step_at_cfl(1.0), 5 * own);  // still below max_dt (round-off: 1/r vs 0.2/r)
+  f.set_velocity([](double, double, double) { return 0.0; }, [](double, double, double) { return 0.0; },
+                 [](double, double, double) { return 0.0; });
+  EXPECT_EQ(f.step_at_cfl(0.4), 0.1);  // at rest: max_dt whatever the target
+  EXPECT_EQ(f.step_at_cfl(0.1), 0.1);
+  for (double bad : {0.0, -0.2, 1.5, std::nan("")}) {
+    try {
+      (void)f.step_at_cfl(bad);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("step_at_cfl(cfl = "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("(0, 1]"), std::string::npos) << e.what();
+    }
   }
 }
 

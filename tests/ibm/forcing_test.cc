@@ -188,5 +188,30 @@ TEST(RowSumScaling, WithoutItNoRowSumsAreKept) {
   EXPECT_TRUE(forcing.row_sums().empty());
 }
 
+// apply()'s per-step factor on the increment share (coupling's step-aware share) is checked:
+// outside (0, 1] it is an input error naming it, before anything is spread.
+TEST(CarryOverIncrementShare, AStepFactorOutsideZeroToOneIsAnInputError) {
+  const grid::Slabs slabs(kGrid, MPI_COMM_SELF);
+  Markers m(kGrid);
+  m.add_body(sphere_mesh(Vec3(24, 24, 24), 7.2, 3), "sphere", rigid_options());
+  ForcingParameters p;
+  p.carry_over = true;
+  DirectForcing forcing(slabs, m, p);
+  grid::XFaceField u(slabs), fu(slabs);
+  grid::YFaceField v(slabs), fv(slabs);
+  grid::ZFaceField w(slabs), fw(slabs);
+  u.fill(1), fu.fill(0), v.fill(0), fv.fill(0), w.fill(0), fw.fill(0);  // a slip of 1: a force if spread
+  for (double bad : {0.0, 1.5}) {
+    try {
+      forcing.apply(0.01, {u, v, w}, {fu, fv, fw}, Vec3::Zero(), bad);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("increment_share_factor = "), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(*std::max_element(fu.data(), fu.data() + fu.size()), 0.0);  // nothing spread
+  EXPECT_EQ(*std::min_element(fu.data(), fu.data() + fu.size()), 0.0);
+}
+
 }  // namespace
 }  // namespace systole::ibm
