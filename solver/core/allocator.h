@@ -5,7 +5,8 @@
 // probes: 10 numbers per probe point, ≈ 100 MB at grid 1; the interpolations' sums; the loads).
 // glibc serves arrays above its mmap threshold (≤ 32 MiB) with fresh mappings and unmaps them
 // on free, so each pass page-faults through them again: at grid 1 the tight heart setting spent
-// more than half of its time there (docs/benchmarks.md, session 23: 2.0–2.9x faster without).
+// more than half of its time there (docs/benchmarks.md, "The heap policy": 2.0–2.9x faster
+// without).
 // keep_freed_memory_in_heap() makes glibc serve every allocation from its heap and never
 // return freed memory to the system, so the arrays of one pass reuse the pages of the last.
 //

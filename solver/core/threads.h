@@ -3,14 +3,15 @@
 //
 // The immersed boundary's loops (solver/ibm/transfer.cc, mls.h) run on OpenMP's team, which is
 // one thread per core unless OMP_NUM_THREADS says otherwise. Measured at `basic` (2 ms of the
-// ejection from a checkpoint, this 2-core machine otherwise idle; docs/benchmarks.md, session
-// 37): one rank with two threads took the wall time of one thread (71.5 against 70.7 s) for
-// 45 % more CPU; two ranks with two threads each (four threads on two cores, OpenMP's default
-// under `mpirun -np 2`) 93.2 s against 63–65 s with one; and one rank's two threads beside
-// another run spent 29 % of its samples spinning in libgomp's barriers. So the ranks are the
-// parallelism and every rank runs one OpenMP thread unless the operator sets OMP_NUM_THREADS.
-// The programs (systole-solve, systole-worker, fsei_case) call share_cores_among_ranks() right
-// after MPI_Init; the server's local workers inherit the operator's OMP_NUM_THREADS, if any.
+// ejection from a checkpoint, this 2-core machine otherwise idle; docs/benchmarks.md, "One
+// OpenMP thread per rank"): one rank with two threads took the wall time of one thread (71.5
+// against 70.7 s) for 45 % more CPU; two ranks with two threads each (four threads on two
+// cores, OpenMP's default under `mpirun -np 2`) 93.2 s against 63–65 s with one; and one rank's
+// two threads beside another run spent 29 % of its samples spinning in libgomp's barriers. So
+// the ranks are the parallelism and every rank runs one OpenMP thread unless the operator sets
+// OMP_NUM_THREADS. The programs (systole-solve, systole-worker, fsei_case) call
+// share_cores_among_ranks() right after MPI_Init; the server's local workers inherit the
+// operator's OMP_NUM_THREADS, if any.
 #include <mpi.h>
 
 #include <string>

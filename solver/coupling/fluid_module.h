@@ -45,7 +45,8 @@ struct FluidModuleOptions {
   // w = min(1, Δt(cfl) / Δt(carry_over_reference_cfl)), the two the fluid's stable steps from the
   // step's state at its own CFL target and at this one (FluidSolver::step_at_cfl): the carried
   // force's error then falls at the reference step's rate per unit of time whatever the CFL
-  // target, and where max_dt or the viscous bound sets both steps w = 1. docs/fsei.md session 45.
+  // target, and where max_dt or the viscous bound sets both steps w = 1. Tested:
+  // FluidModule.TheReferenceCflSharesTheIncrementsByTheStepRatio.
   double carry_over_reference_cfl = 0;
 };
 

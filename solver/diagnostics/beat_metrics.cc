@@ -40,7 +40,8 @@ double peak_abs(std::span<const double> v) {
 // The topographic prominence of the local maximum q[i] within q[first..]: its height above the
 // higher of the two lowest points between it and the nearest higher sample on either side (or the
 // range's ends). A ripple on the rise of a wave has a small prominence; the wave's crest a large
-// one (ours: P3's 39-ml/s ripple on its E wave's rise, docs/fsei.md session 31).
+// one (ours: a coupled run's 39-ml/s ripple on its E wave's rise;
+// BeatMetrics.ARippleOnTheEWavesRiseIsNotTheEWave).
 double prominence(std::span<const double> q, size_t first, size_t i) {
   double left_min = q[i];
   for (size_t j = i; j-- > first && q[j] <= q[i];) left_min = std::min(left_min, q[j]);
@@ -118,8 +119,8 @@ ValveEvents valve_events(std::span<const double> time_s, std::span<const double>
   // The valve's state is the side of the level it is on, and only a lasting crossing changes it:
   // the first event is a crossing away from the state of the first sample, the other event the
   // first lasting crossing back after it. A ripple through the level from the state the valve is
-  // already in is not an event (w2's aortic flow poked above its level for 1 ms at 18 ms and
-  // "closed" there, docs/fsei.md session 20) (ours).
+  // already in is not an event (a coupled run's aortic flow poked above its level for 1 ms at
+  // 18 ms and "closed" there; BeatMetrics.AValveThatStartsClosedClosesOnlyAfterItOpened) (ours).
   const bool starts_open = flow_ml_s.front() > level;
   const Crossing first = starts_open ? Crossing::kDownward : Crossing::kUpward;
   const Crossing second = starts_open ? Crossing::kUpward : Crossing::kDownward;

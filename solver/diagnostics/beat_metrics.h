@@ -36,8 +36,9 @@ struct BeatSamples {
   double valve_threshold_fraction = 0;
   // A crossing counts as a valve event only if the flow then stays on its new side of the
   // level for valve_min_dwell_fraction * period_s (or to the window's end) (ours): a 3-D valve
-  // flow ripples through the level for a few ms around an opening (p2's mitral "opened" at
-  // 0.386 T and "closed" at 0.388 T, docs/fsei.md session 17). 0 = every crossing counts.
+  // flow ripples through the level for a few ms around an opening (a coupled run's mitral "opened"
+  // at 0.386 T and "closed" at 0.388 T; BeatMetrics.ADwellIgnoresARippleThroughTheThreshold).
+  // 0 = every crossing counts.
   double valve_min_dwell_fraction = 0;
   // true: end-diastole is the beat's first sample (EDV, EDP there) instead of the mitral
   // closure, for beats that start at the activation with the valves closed (scenes fsi/fsei).

@@ -315,8 +315,9 @@ struct LensLeaflet {
 //   vertically, so that near the free edges neighbouring cusps face each other across vertical
 //   coaptation strips, pressed together by the aortic pressure.
 // Every fibre runs from one commissure to the other and the fibres near the wall end on the
-// anchored attachment, so the fibre-stiff tissue carries the load (docs/fsei.md: the
-// flat-annulus cusps' fibres end on free edges, and their cross-fibre law cannot).
+// anchored attachment, so the fibre-stiff tissue carries the load (measured with the closed valves
+// alone, bench/structure/valve_load: the flat-annulus cusps' fibres end on free edges, and their
+// cross-fibre law cannot).
 struct CrownCusps {
   Vec3 centre;                 // the aortic orifice centre, in the valvular plane
   double H, h_tip, half_gap, h_mesh, thickness;
@@ -706,7 +707,7 @@ LeftHeart build_left_heart(const config::Geometry& g, const config::Fluid& fluid
   // edge, ending on the ring's nodes), and meet at
   // a tip near the centre, raised to the coaptation height h_c = 0.5 r_a; the belly is a height
   // field between the annulus and the free edges (ours). Under the aortic pressure this valve
-  // does not hold (docs/fsei.md, the closed valves alone): with the commissures in the flat
+  // does not hold (measured with the closed valves alone): with the commissures in the flat
   // annulus, nothing carries the free edges but their contact.
   const double h_c = kCuspHeightPerRadius * r_a;
   lay.cusp_coaptation_height_mm = h_c;

@@ -274,7 +274,7 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
     ++report_.iterations;
     // The last pass (the seed's single one among them) is not re-interpolated: only a slip
     // after it would read u* = û + Δt f again, and no caller needs one (ours, for cost: one of
-    // the 5 interpolations of a step with 3 passes and the carry-over; session 43).
+    // the 5 interpolations of a step with 3 passes and the carry-over; the results are the same).
     if (pass + 1 == par_.iterations) break;
     // then interpolate u* = û + Δt f again (multi-direct).
     update(u_hat.u, f.u, *work_u_);

@@ -38,34 +38,33 @@ struct ForcingParameters {
   // started from; the force applied this step is F whatever w. Once the passes' slip follows the
   // carried force's error e (slip ≈ −Δt e / λ, λ the share of the slip the passes remove), e falls
   // by 1 − w per step: at the rate w/Δt per unit of time, so w = Δt/Δt_ref keeps the rate of the
-  // step Δt_ref at a smaller step (at CFL 0.2 three passes ran away where one pass completed:
-  // docs/fsei.md sessions 44–45). A steady load reaches the same carried force and slip as with
+  // step Δt_ref at a smaller step (in the immersed heart at CFL 0.2 three passes ran away where one
+  // pass completed). A steady load reaches the same carried force and slip as with
   // w = 1, only more slowly (tests/ibm/forcing_test.cc).
   double carry_over_increment_share = 1.0;
   // With carry_over: markers within this × h of a marker of another body carry nothing over
   // (ours), [0, 4]; 0: every marker carries. Anti-windup: where two bodies' supports overlap
   // (leaflets meeting at a commissure, a leaflet at its annulus) their targets can conflict, the
   // slip there cannot be removed, and the carried force would grow step after step. Rigid
-  // bodies count too: leaving the valvular plane out, the heart's cusps crumpled at 16.6 ms
-  // (docs/fsei.md, session 12).
+  // bodies count too: leaving the valvular plane out, the heart's cusps crumpled at 16.6 ms.
   double carry_over_exclusion_cells = 0.0;
   // With the exclusion: false keeps the carry-over of rigid bodies' markers next to other bodies
   // (ours; the other bodies' markers next to them still carry none). A rigid body's target is
-  // its own prescribed motion, which its anchored neighbours share; tried with MLS (session 12)
-  // a cusp crumpled next to the plane: docs/fsei.md.
+  // its own prescribed motion, which its anchored neighbours share; tried with MLS, a cusp
+  // crumpled next to the plane.
   bool carry_over_exclusion_rigid = true;
   // With carry_over: a pair of markers of which one is a rigid body's excludes within
   // max(this, carry_over_exclusion_cells) × h (ours), [0, 4]; 0: as any pair. A wider ring where a
   // deformable wall meets the rigid valvular plane: there the wall's motion and the plane's rest
   // conflict over more of the kernel's support than between two moving bodies (a stiff LA wound up
-  // 1.1-2.4 mm, 0.7-1.6 h, below the plane at 180 bpm: docs/fsei.md, session 39).
+  // 1.1-2.4 mm, 0.7-1.6 h, below the plane at 180 bpm).
   double carry_over_exclusion_rigid_cells = 0.0;
   // With carry_over: a pair of a rigid body's marker and a one-sided deformable body's (a wall,
   // blood on one side: the chambers, the aorta) excludes within max(this,
   // carry_over_exclusion_rigid_cells, carry_over_exclusion_cells) × h (ours), [0, 4]; 0: as
   // the other rigid pairs. The wall-only ring: a two-sided leaflet's base keeps its carried force
   // next to the plane; with the ring on every body the closed aortic valve passed 1.22 ml back
-  // against 0.39 ml with it on the walls only (docs/fsei.md, session 39).
+  // against 0.39 ml with it on the walls only (measured at `coarse`, 70 bpm).
   double carry_over_exclusion_rigid_wall_cells = 0.0;
   // Scale each pass's correction per marker and component by 1/max(r_b, 1/4), r_b the row sum of
   // A = I S, the interpolation of the spreading of a unit force at every active marker (ours: a
@@ -75,7 +74,7 @@ struct ForcingParameters {
   // so unscaled the smooth slip falls by about half per pass on a lone body; scaled, its rows sum
   // to 1 wherever they are. The floor 1/4 bounds the gain (a marker whose support holds little
   // else). Costs one spreading and one interpolation per step (the row sums follow the markers).
-  // docs/fsei.md session 44.
+  // Tested: tests/ibm/forcing_test.cc (RowSumScaling.*).
   bool row_sum_scaling = false;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
@@ -83,7 +82,8 @@ struct ForcingParameters {
   // The markers' interpolation and spreading weights (TransferKernel): the seed's MLS, or the
   // divergence-free composite B-splines (ours), whose interpolated velocity has no flux through a
   // closed wall: the forcing can no longer hold U = V at every marker while the enclosed volume
-  // changes (the IB's volume leak, docs/fsei.md session 14).
+  // changes (the IB's volume leak; tested in
+  // FsiSphere.TheDivergenceFreeKernelHoldsTheVolumeTheMlsKernelLoses).
   TransferKernel kernel = TransferKernel::mls;
 };
 void validate(const ForcingParameters& p);

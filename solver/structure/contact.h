@@ -29,7 +29,8 @@
 // the forces' sum still vanishes (their torque no longer does). Without it, surfaces pressed
 // together through the layer chatter: the closed aortic valve's cusps under a held 90 mmHg with
 // the mass damping 0.5/ms keep nodes sliding at 0.6-1.2 m/s, at 0.004 m/s without contact and with
-// zeta 0.5 (docs/fsei.md, session 36); the chatter is along the surfaces: a normal dashpot alone
+// zeta 0.5 (ClosedValveLoad.TheContactsViscousLayerStillsTheClosedAorticCusps); the chatter is
+// along the surfaces: a normal dashpot alone
 // leaves 0.3-0.6 m/s.
 // The penalty's stiffness enters each node's Gershgorin row (2 k_i on i, 2 k_i w_j on B's nodes;
 // with damping divided by (sqrt(1 + zeta^2) - zeta)^2, the central difference's stable-step

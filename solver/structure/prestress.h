@@ -3,7 +3,7 @@
 //
 // The seed starts its aorta "pretensioned by an external force providing a ground pressure of
 // 60 mmHg" (MODEL.md §1). An outer load equal to the blood's pressure leaves the wall without
-// tension, and an untensioned tube under a net outer pressure buckles (docs/fsei.md, session 10).
+// tension, and an untensioned tube under a net outer pressure buckles (the immersed aorta did).
 // Here the wall itself carries the pressure: the rest lengths l0 of the springs are shortened so
 // that the shell, at its built (stress-free mesh) positions, is in equilibrium with the given
 // nodal loads (an inner pressure). This is the force-density idea of tension structures (Schek
@@ -21,8 +21,8 @@
 //    mesh with near-mechanisms wild: on the heart's aorta strains of ±80 % alternate along mesh
 //    lines. The smoothing trades a residual for a smooth stress (ours): with the default 1e-2 the
 //    aorta keeps 14 % of its load unbalanced (its wall moves a little at t = 0 to carry it) with
-//    strains of -19 ... +48 %; a small smoothing (1e-9) gives the exact equilibrium (docs/fsei.md,
-//    tests/structure/prestress_test.cc);
+//    strains of -19 ... +48 %; a small smoothing (1e-9) gives the exact equilibrium
+//    (tests/structure/prestress_test.cc);
 //  - each F_e becomes a rest length by inverting the spring law at the current length:
 //    tau(eps) C / l = F, eps = 1 - l0/l, by bisection on [0, 1) ([-1, 0] for a compressive F: an
 //    obtuse triangle's long edge carries compression even in isotropic tension); a force beyond
