@@ -1,5 +1,5 @@
 // What one sample of the chambers' kinetic energy costs (scenes fsi/fsei, series
-// heart_kinetic_energy_mj): the two ray-parity scans of solver/scene/chamber_cells.h (the LV's and
+// heart_kinetic_energy_mj): the two ray-parity scans of solver/scene/fsei/chamber_cells.h (the LV's and
 // the LA's cells at the built shapes) plus the sum of |u|² over the cells found, on one rank over
 // the whole box, at a resolution preset. The scene does this once per time-series sample
 // (outputs.time_series_interval_ms, 1 ms by default), each rank over its own slab.
@@ -14,7 +14,7 @@
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
 #include "solver/geometry/left_heart.h"
-#include "solver/scene/chamber_cells.h"
+#include "solver/scene/fsei/chamber_cells.h"
 #include "solver/scene/fsei_scene.h"
 
 using namespace systole;

@@ -24,7 +24,7 @@
 // fsei.aortic_pressure_ramp_ms > 0 the outer load is ramped from blood at rest instead).
 // Chamber pressures are spatial means over probe spheres inside the LV, LA and aortic root,
 // relative to a probe in the outer fluid (ours: the box's pressure level is arbitrary).
-// Checkpoints (fsei_checkpoint.h): with a RunControl::checkpoint_directory(), the whole coupled
+// Checkpoints (fsei/checkpoint.h): with a RunControl::checkpoint_directory(), the whole coupled
 // state is written there every fsei.checkpoint_interval_ms and on cancel, and a run that finds
 // a checkpoint of the same scenario there resumes from it, bitwise as the straight run;
 // metric resumed_from_ms says where the run started (0: from t = 0).
@@ -46,6 +46,10 @@ struct GridPoints {
   int nx = 0, ny = 0, nz = 0;
 };
 GridPoints fsei_grid_points(const config::Scenario& scenario);
+
+// The scene's input rules (InputError naming the field, its value and what is allowed). run_fsei
+// checks them first.
+void check_fsei_scenario(const config::Scenario& scenario);
 
 // Runs scene "fsei" or "fsi" on MPI_COMM_WORLD (the caller has initialised MPI). Throws
 // InputError (geometry outside the box, a grid too coarse for the valves with the minimum,
@@ -85,7 +89,7 @@ double prescribed_peak_tension_kpa(const config::Fsei& fsei, Chamber chamber);
 // cells in proportion to the share of the markers in the plane (by their z: the immersed
 // boundary works per marker on the rank owning its plane). marker_z in grid units; throws
 // std::invalid_argument for none or a non-finite one.
-inline constexpr double kIbToFluidWork = 12;  // (ours) perf in the heart, docs/benchmarks.md, session 18
+inline constexpr double kIbToFluidWork = 12;  // (ours) measured with perf in the heart: docs/benchmarks.md
 std::vector<double> slab_plane_weights(const grid::Grid& g, const std::vector<double>& marker_z);
 
 }  // namespace systole::scene

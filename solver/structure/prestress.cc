@@ -228,7 +228,7 @@ Prestress membrane_prestress(const ShellModel& model, const std::vector<Vec3>& l
     if (tau_needed[e] < 0) ++out.compressed_springs;
     // Bisection on [0, 1) ([-1, 0]), not on the strain limit's bracket: the check above puts
     // the root inside the limit, and the rest lengths do not depend on the limit (a guard; a run
-    // stopped by it resumes from its checkpoint with a looser one, fsei_checkpoint.h).
+    // stopped by it resumes from its checkpoint with a looser one, fsei/checkpoint.h).
     double lo = tau_needed[e] > 0 ? 0 : -1, hi = tau_needed[e] > 0 ? 1 : 0;
     for (int it = 0; it < 200 && hi - lo > 1e-15; ++it) {
       const double mid = 0.5 * (lo + hi);

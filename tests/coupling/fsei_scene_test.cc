@@ -23,9 +23,9 @@
 #include "solver/geometry/left_heart.h"
 #include "solver/grid/grid.h"
 #include "solver/diagnostics/phase_average.h"
-#include "solver/scene/chamber_cells.h"
-#include "solver/scene/fsei_checkpoint.h"
-#include "solver/scene/fsei_fields.h"
+#include "solver/scene/fsei/chamber_cells.h"
+#include "solver/scene/fsei/checkpoint.h"
+#include "solver/scene/fsei/fields.h"
 #include "solver/scene/fsei_scene.h"
 #include "solver/structure/shapes.h"
 

@@ -184,7 +184,7 @@ TEST(Prestress, ALoadBeyondTheStrainLimitIsAnInputErrorNamingTheBody) {
 
 // The strain limit is a guard, not a parameter of the pre-stress: raising it leaves every rest
 // length bitwise the same (a run stopped by the guard resumes from its checkpoint with a looser
-// one, solver/scene/fsei_checkpoint.h), as long as the needed strains are within both limits.
+// one, solver/scene/fsei/checkpoint.h), as long as the needed strains are within both limits.
 TEST(Prestress, TheRestLengthsDoNotDependOnTheStrainLimit) {
   std::vector<double> rest[2];
   double max_strain = 0;

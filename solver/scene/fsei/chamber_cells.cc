@@ -1,4 +1,4 @@
-#include "solver/scene/chamber_cells.h"
+#include "solver/scene/fsei/chamber_cells.h"
 
 #include <algorithm>
 #include <cmath>

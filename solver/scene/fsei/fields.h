@@ -50,7 +50,7 @@ class FseiFieldWriter {
  public:
   // names[b]: the name of group body b; mm_per_unit: the fluid grid's length unit in mm;
   // velocity/pressure/vorticity scales: nondimensional → m/s, mmHg, 1/s.
-  // resumed_times_ms (a run resumed from a checkpoint, fsei_checkpoint.h): the times of the
+  // resumed_times_ms (a run resumed from a checkpoint, fsei/checkpoint.h): the times of the
   // frames the checkpointed run had written. When fsei_bodies.h5 in `dir` holds all of them,
   // its frames from k = resumed_times_ms->size() on (left by the interrupted attempt after the
   // checkpoint) are removed and the numbering continues; otherwise (another output directory)

@@ -1,4 +1,4 @@
-#include "solver/scene/fsei_fields.h"
+#include "solver/scene/fsei/fields.h"
 
 #include <hdf5.h>
 #include <mpi.h>
@@ -290,7 +290,7 @@ void write_wss_phase_average(const std::filesystem::path& dir, const structure::
   const char* owner = "fsei wss phase average";
   const std::string h5name = "fsei_wss_phase.h5";
   const std::string path = (dir / h5name).string();
-  std::error_code made;  // the output directory may not exist yet (fsei_case out=DIR; a missing one cost session 38 a run's end)
+  std::error_code made;  // the output directory may not exist yet (fsei_case out=DIR; a missing one once cost a run its end)
   std::filesystem::create_directories(dir, made);
   const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file < 0)

@@ -1,4 +1,4 @@
-#include "solver/scene/fsei_checkpoint.h"
+#include "solver/scene/fsei/checkpoint.h"
 
 #include <hdf5.h>
 #include <mpi.h>
