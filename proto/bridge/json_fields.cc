@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include <google/protobuf/util/json_util.h>
+#include <nlohmann/json.hpp>
 
 #include "solver/core/nearest_names.h"
 
@@ -12,7 +13,7 @@ namespace {
 
 using google::protobuf::Descriptor;
 using google::protobuf::FieldDescriptor;
-using nlohmann::json;
+using json = nlohmann::ordered_json;  // the document's order, for the messages
 
 bool is_well_known(const Descriptor& type) { return type.file()->package() == "google.protobuf"; }
 
@@ -89,13 +90,14 @@ std::string without_exception_id(const std::string& what) {
   return end == std::string::npos ? what : what.substr(end + 2);
 }
 
-}  // namespace
-
-std::vector<std::string> unknown_json_fields(const json& document, const Descriptor& type, const std::string& prefix) {
-  std::vector<std::string> problems;
-  if (document.is_object()) (void)known_fields_only(document, type, prefix, problems);
-  return problems;
+// protobuf's "(a.b): invalid value ..." as "a.b: invalid value ...".
+std::string readable(const std::string& protobuf_message) {
+  const auto end = protobuf_message.find("): ");
+  if (protobuf_message.empty() || protobuf_message[0] != '(' || end == std::string::npos) return protobuf_message;
+  return protobuf_message.substr(1, end - 1) + protobuf_message.substr(end + 1);
 }
+
+}  // namespace
 
 JsonParse parse_json_message(const std::string& text, google::protobuf::Message& message) {
   JsonParse out;
@@ -116,7 +118,7 @@ JsonParse parse_json_message(const std::string& text, google::protobuf::Message&
   options.ignore_unknown_fields = false;  // none are left; a value of the wrong type is still an error
   const auto status = google::protobuf::util::JsonStringToMessage(known.dump(), &message, options);
   out.parsed = status.ok();
-  if (!status.ok()) out.problems.push_back(std::string(status.message()));
+  if (!status.ok()) out.problems.push_back(readable(std::string(status.message())));
   return out;
 }
 

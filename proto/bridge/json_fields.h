@@ -3,21 +3,13 @@
 // unknown key and names no alternative; these walk the document against the message's
 // descriptor first, so a body with three misspelt keys gets three messages, each with the
 // key's full path, the nearest allowed names (solver/core/nearest_names.h) and all of them.
+// Used by the REST gateway, scenario files (scenario_bridge.h) and the CLI's campaign specs.
 #include <string>
 #include <vector>
 
-#include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
-#include <nlohmann/json.hpp>
 
 namespace systole::bridge {
-
-// One message per key of `document`, at any depth, that names no field of `type`: proto3 JSON
-// accepts a field's name and its lowerCamel json_name. Descends into message fields, repeated
-// messages and maps of messages (google.protobuf's well-known types are left to protobuf).
-// `prefix` starts every path ("scenario" gives "scenario.fsei.coupling_ordr").
-std::vector<std::string> unknown_json_fields(const nlohmann::json& document, const google::protobuf::Descriptor& type,
-                                             const std::string& prefix = "");
 
 // What parse_json_message() found.
 struct JsonParse {
@@ -26,10 +18,12 @@ struct JsonParse {
 };
 
 // proto3 JSON text → `message` ("" is {}), collecting problems instead of stopping at the first:
-// malformed JSON or a document that is not an object (then nothing else), every unknown key
-// (unknown_json_fields), and protobuf's first error on the document without those keys (a
-// value of the wrong type). With only unknown keys, `parsed` is true and the caller can check
-// the rest of the message to report its problems in the same error.
+// malformed JSON or a document that is not an object (then nothing else), every unknown key at
+// any depth, in the document's order (proto3 JSON accepts a field's name and its lowerCamel
+// json_name; message fields, repeated messages and maps of messages are walked, protobuf's
+// well-known types left to protobuf), and protobuf's first error on the document without those
+// keys (a value of the wrong type). With only unknown keys, `parsed` is true and the caller can
+// check the rest of the message to report its problems in the same error.
 JsonParse parse_json_message(const std::string& text, google::protobuf::Message& message);
 
 }  // namespace systole::bridge
