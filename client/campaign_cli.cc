@@ -26,10 +26,12 @@
 #include <grpcpp/grpcpp.h>
 #include <nlohmann/json.hpp>
 
+#include "proto/bridge/json_fields.h"
 #include "proto/bridge/scenario_bridge.h"
 #include "solver/config/parameter_table.h"
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
+#include "solver/core/nearest_names.h"
 #include "solver/io/result_writer.h"
 #include "systole/v1/campaign.grpc.pb.h"
 
@@ -317,8 +319,10 @@ void apply_set(json& doc, const std::string& assignment) {
     while (std::getline(in, item, ','))
       if (!item.empty()) v.push_back(item);
   } else {
-    throw CliError("--set " + assignment + ": unknown key '" + key +
-                       "'; use base.<scenario field> (e.g. base.heart_rate_bpm=75) or one of samples, seed, design, "
+    const std::vector<std::string> keys{"samples", "seed", "design", "priority", "bootstrap_resamples", "no_cache",
+                                        "quantities_of_interest"};
+    throw CliError("--set " + assignment + ": unknown key '" + key + "'; " + did_you_mean(key, keys) +
+                       "use base.<scenario field> (e.g. base.heart_rate_bpm=75) or one of samples, seed, design, "
                        "priority, bootstrap_resamples, no_cache, quantities_of_interest (edit parameters in the file)",
                    2);
   }
@@ -340,14 +344,16 @@ v1::CampaignSpec load_spec(const std::string& file, const std::vector<std::strin
   if (!doc.is_object()) throw CliError("campaign spec '" + file + "' must hold a JSON object (a systole.v1.CampaignSpec)", 2);
   for (const auto& s : sets) apply_set(doc, s);
   v1::CampaignSpec spec;
-  const auto status = google::protobuf::util::JsonStringToMessage(doc.dump(), &spec);  // unknown fields are errors
-  if (!status.ok()) throw CliError("campaign spec '" + file + "': " + std::string(status.message()), 2);
-  try {  // the base scenario, with the server's own checks, before anything is sent
-    (void)bridge::validate(spec.base_scenario());
-  } catch (const InputError& e) {
-    throw CliError("campaign spec '" + file + "': base_scenario: " + e.what(), 2);
-  }
-  return spec;
+  // Every unknown key (with the nearest allowed names), then the base scenario with the
+  // server's own checks, in one error before anything is sent.
+  bridge::JsonParse parse = bridge::parse_json_message(doc.dump(), spec);
+  if (parse.parsed)
+    for (const auto& p : bridge::scenario_problems(spec.base_scenario())) parse.problems.push_back("base_scenario: " + p);
+  const auto& all = parse.problems;
+  if (all.empty()) return spec;
+  std::string text = "campaign spec '" + file + "'" + (all.size() == 1 ? ": " : " (" + std::to_string(all.size()) + " problems):\n  ");
+  for (std::size_t i = 0; i < all.size(); ++i) text += (i ? "\n  " : "") + all[i];
+  throw CliError(text, 2);
 }
 
 // ---- results files ------------------------------------------------------------------------

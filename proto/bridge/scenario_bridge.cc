@@ -5,18 +5,29 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include "proto/bridge/json_fields.h"
 #include "solver/core/errors.h"
 
 namespace systole::bridge {
 
+namespace {
+
+std::string join_problems(const std::string& what, const std::vector<std::string>& problems) {
+  std::string out = problems.size() == 1 ? what + ": " : what + " (" + std::to_string(problems.size()) + " problems):\n  ";
+  for (std::size_t i = 0; i < problems.size(); ++i) out += (i ? "\n  " : "") + problems[i];
+  return out;
+}
+
+}  // namespace
+
 v1::Scenario scenario_proto_from_json_text(const std::string& json_text) {
   v1::Scenario message;
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;  // unknown fields are errors, never ignored
-  const auto status = google::protobuf::util::JsonStringToMessage(json_text, &message, options);
-  if (!status.ok())
-    throw InputError("invalid scenario JSON: " + std::string(status.message()));
-  return message;
+  JsonParse parse = parse_json_message(json_text, message);  // unknown fields are errors
+  if (parse.problems.empty()) return message;
+  // With only unknown keys the rest is checked too, so that one error lists every problem.
+  if (parse.parsed)
+    for (const auto& p : scenario_problems(message)) parse.problems.push_back(p);
+  throw InputError(join_problems("invalid scenario JSON", parse.problems));
 }
 
 v1::Scenario load_scenario_file(const std::string& path, const std::vector<std::string>& overrides) {
@@ -47,6 +58,10 @@ std::string to_json_text(const v1::Scenario& scenario) {
 
 config::Scenario validate(const v1::Scenario& scenario) {
   return config::parse_scenario(nlohmann::json::parse(to_json_text(scenario)));
+}
+
+std::vector<std::string> scenario_problems(const v1::Scenario& scenario) {
+  return config::scenario_problems(nlohmann::json::parse(to_json_text(scenario)));
 }
 
 }  // namespace systole::bridge

@@ -12,7 +12,8 @@
 
 namespace systole::bridge {
 
-// proto3 JSON text → message. Unknown fields and type errors throw InputError naming them.
+// proto3 JSON text → message. Throws one InputError listing every unknown field (with its
+// nearest allowed names, json_fields.h), a type error, and the scenario's other problems.
 v1::Scenario scenario_proto_from_json_text(const std::string& json_text);
 
 // Reads a scenario file, applies `path=value` overrides (config::apply_override), and parses
@@ -21,6 +22,10 @@ v1::Scenario load_scenario_file(const std::string& path, const std::vector<std::
 
 // Wire message → validated config (defaults applied, every range and rule checked).
 config::Scenario validate(const v1::Scenario& scenario);
+
+// What validate() would throw, one message per problem (config::scenario_problems); empty
+// for a valid scenario.
+std::vector<std::string> scenario_problems(const v1::Scenario& scenario);
 
 // Message → compact JSON with proto field names (snake_case); unset fields omitted.
 std::string to_json_text(const v1::Scenario& scenario);

@@ -12,6 +12,7 @@
 #include "proto/bridge/scenario_bridge.h"
 #include "solver/config/parameter_table.h"
 #include "solver/core/errors.h"
+#include "solver/core/nearest_names.h"
 #include "solver/scene/scene.h"
 #include "uq/distributions.h"
 #include "uq/sampling.h"
@@ -117,34 +118,37 @@ v1::Interval interval(const uq::IndexEstimate& e) {
   return out;
 }
 
-}  // namespace
-
-CampaignService::CampaignService(store::JobStore& store, ChangeNotifier& notifier, ServiceOptions options,
-                                 CampaignLimits limits)
-    : store_(store), notifier_(notifier), options_(std::move(options)), limits_(limits) {}
-
-v1::SubmitCampaignResponse CampaignService::submit(const v1::SubmitCampaignRequest& request) {
-  if (!request.has_spec()) throw ServiceError(StatusCode::INVALID_ARGUMENT, "spec is required");
-  const v1::CampaignSpec& spec = request.spec();
-  std::vector<std::string> errors;
-  auto add = [&](const std::string& m) { errors.push_back(m); };
-
+// A campaign spec, checked: its base scenario and each parameter's distribution, or every
+// problem, each naming the offending field (and, for a misspelt name, the nearest known ones).
+struct CheckedSpec {
   config::Scenario base;
-  try {
-    base = bridge::validate(spec.base_scenario());
-  } catch (const InputError& e) {
-    throw InputError(std::string("base_scenario: ") + e.what());
-  }
+  std::vector<uq::Distribution> distributions;
+  std::vector<std::string> problems;
+};
+
+// The base scenario, or its problems (each prefixed with base_scenario).
+void check_base_scenario(const v1::CampaignSpec& spec, CheckedSpec& out) {
+  const std::vector<std::string> base = bridge::scenario_problems(spec.base_scenario());
+  for (const auto& p : base) out.problems.push_back("base_scenario: " + p);
+  if (base.empty()) out.base = bridge::validate(spec.base_scenario());
+}
+
+// Each uncertain parameter: a real-valued scenario field, once, with a distribution inside its range.
+void check_parameters(const v1::CampaignSpec& spec, CheckedSpec& out) {
+  auto add = [&](const std::string& m) { out.problems.push_back(m); };
   const int d = spec.parameters_size();
   if (d == 0) add("parameters: at least one uncertain parameter is required");
-  std::vector<uq::Distribution> distributions;
   std::set<std::string> seen;
   for (int i = 0; i < d; ++i) {
     const auto& p = spec.parameters(i);
     const std::string where = "parameters[" + std::to_string(i) + "] (" + p.path() + ")";
     const config::Param* field = config::find_parameter(p.path());
     if (field == nullptr) {
-      add("parameters[" + std::to_string(i) + "].path '" + p.path() + "' is not a scenario field (see docs/parameters.md)");
+      std::vector<std::string> real_fields;
+      for (const config::Param& q : config::parameter_table())
+        if (q.kind == config::Kind::kReal) real_fields.emplace_back(q.path);
+      add("parameters[" + std::to_string(i) + "].path '" + p.path() + "' is not a scenario field; " +
+          did_you_mean(p.path(), real_fields) + "(see docs/parameters.md)");
       continue;
     }
     if (field->kind != config::Kind::kReal) {
@@ -154,18 +158,24 @@ v1::SubmitCampaignResponse CampaignService::submit(const v1::SubmitCampaignReque
     if (!seen.insert(p.path()).second) add(where + ": the same field appears twice");
     try {
       uq::Distribution dist = make_distribution(p, where);
-      const uq::Support s = dist.support();
-      if (!support_inside(s, *field))
-        add(where + ": " + dist.describe() + " has support [" + number(s.lo) + ", " + number(s.hi) +
+      const uq::Support sup = dist.support();
+      if (!support_inside(sup, *field))
+        add(where + ": " + dist.describe() + " has support [" + number(sup.lo) + ", " + number(sup.hi) +
             "], outside the allowed range " + config::describe_allowed(*field) + " of " + p.path() +
             "; narrow it or use truncated_normal");
-      distributions.push_back(dist);
+      out.distributions.push_back(dist);
     } catch (const InputError& e) {
       add(e.what());
     }
   }
-  if (spec.samples() < 1 || spec.samples() > limits_.max_samples)
-    add("samples = " + std::to_string(spec.samples()) + " is out of range [1, " + std::to_string(limits_.max_samples) + "]");
+}
+
+// The sample counts, the design's limits, the bootstrap and the priority.
+void check_sizes(const v1::CampaignSpec& spec, const CampaignLimits& limits, CheckedSpec& out) {
+  auto add = [&](const std::string& m) { out.problems.push_back(m); };
+  const int d = spec.parameters_size();
+  if (spec.samples() < 1 || spec.samples() > limits.max_samples)
+    add("samples = " + std::to_string(spec.samples()) + " is out of range [1, " + std::to_string(limits.max_samples) + "]");
   const uq::DesignKind kind = design_kind(spec.design());
   if (kind == uq::DesignKind::saltelli) {
     if (spec.samples() == 1) add("samples = 1: the SALTELLI design needs at least 2 base samples");
@@ -175,29 +185,65 @@ v1::SubmitCampaignResponse CampaignService::submit(const v1::SubmitCampaignReque
   }
   const long long jobs_total = kind == uq::DesignKind::saltelli ? static_cast<long long>(spec.samples()) * (d + 2)
                                                                  : spec.samples();
-  if (jobs_total > limits_.max_jobs)
-    add("the campaign would run " + std::to_string(jobs_total) + " jobs; at most " + std::to_string(limits_.max_jobs));
-  if (spec.quantities_of_interest_size() == 0)
-    add("quantities_of_interest: name at least one metric, e.g. ejection_fraction_percent");
-  const auto& known = scene::metric_names(base.scene);
-  for (int i = 0; i < spec.quantities_of_interest_size(); ++i) {
-    const std::string& q = spec.quantities_of_interest(i);
-    if (std::find(known.begin(), known.end(), q) == known.end()) {
-      std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      add("quantities_of_interest[" + std::to_string(i) + "] '" + q + "' is not a metric of scene '" + base.scene +
-          "'; known: " + list);
-    }
-  }
+  if (jobs_total > limits.max_jobs)
+    add("the campaign would run " + std::to_string(jobs_total) + " jobs; at most " + std::to_string(limits.max_jobs));
   if (spec.bootstrap_resamples() < 0 || spec.bootstrap_resamples() > 100000)
     add("bootstrap_resamples = " + std::to_string(spec.bootstrap_resamples()) + " is out of range [0, 100000]");
   if (spec.priority() < store::JobStore::kMinPriority || spec.priority() > store::JobStore::kMaxPriority)
     add("priority = " + std::to_string(spec.priority()) + " is out of range [-1000, 1000]");
-  if (!errors.empty()) {
+}
+
+// Each quantity of interest: a metric of the base scenario's scene (when that scene exists).
+void check_quantities(const v1::CampaignSpec& spec, CheckedSpec& out) {
+  if (spec.quantities_of_interest_size() == 0)
+    out.problems.push_back("quantities_of_interest: name at least one metric, e.g. ejection_fraction_percent");
+  const std::string scene =
+      spec.base_scenario().has_scene() ? spec.base_scenario().scene() : config::default_scenario().scene;
+  const auto& implemented = config::implemented_scenes();
+  if (std::find(implemented.begin(), implemented.end(), scene) == implemented.end()) return;  // base_scenario says so
+  const auto& known = scene::metric_names(scene);
+  for (int i = 0; i < spec.quantities_of_interest_size(); ++i) {
+    const std::string& q = spec.quantities_of_interest(i);
+    if (std::find(known.begin(), known.end(), q) == known.end())
+      out.problems.push_back("quantities_of_interest[" + std::to_string(i) + "] '" + q + "' is not a metric of scene '" +
+                             scene + "'; " + did_you_mean(q, known) + "known: " + join_names(known));
+  }
+}
+
+CheckedSpec check_spec(const v1::CampaignSpec& spec, const CampaignLimits& limits) {
+  CheckedSpec out;
+  check_base_scenario(spec, out);
+  check_parameters(spec, out);
+  check_sizes(spec, limits, out);
+  check_quantities(spec, out);
+  return out;
+}
+
+}  // namespace
+
+CampaignService::CampaignService(store::JobStore& store, ChangeNotifier& notifier, ServiceOptions options,
+                                 CampaignLimits limits)
+    : store_(store), notifier_(notifier), options_(std::move(options)), limits_(limits) {}
+
+std::vector<std::string> CampaignService::problems(const v1::SubmitCampaignRequest& request) const {
+  if (!request.has_spec()) return {"spec is required"};
+  return check_spec(request.spec(), limits_).problems;
+}
+
+v1::SubmitCampaignResponse CampaignService::submit(const v1::SubmitCampaignRequest& request) {
+  if (!request.has_spec()) throw ServiceError(StatusCode::INVALID_ARGUMENT, "spec is required");
+  const v1::CampaignSpec& spec = request.spec();
+  CheckedSpec checked = check_spec(spec, limits_);
+  if (!checked.problems.empty()) {
+    const auto& errors = checked.problems;
     std::string message = errors.size() == 1 ? "invalid campaign: " : "invalid campaign (" + std::to_string(errors.size()) + " problems):\n  ";
     for (size_t i = 0; i < errors.size(); ++i) message += (i ? "\n  " : "") + errors[i];
     throw InputError(message);
   }
+  const config::Scenario& base = checked.base;
+  const std::vector<uq::Distribution>& distributions = checked.distributions;
+  const int d = spec.parameters_size();
+  const uq::DesignKind kind = design_kind(spec.design());
 
   // The design, in the unit cube, then mapped through each distribution's quantile.
   uq::Matrix unit;

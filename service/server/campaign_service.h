@@ -5,6 +5,7 @@
 // the gRPC service and the REST gateway call it.
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "service/server/job_service.h"
 #include "systole/v1/campaign.pb.h"
@@ -24,6 +25,9 @@ class CampaignService {
 
   // INVALID_ARGUMENT (every problem listed, each naming the offending field) or the campaign.
   v1::SubmitCampaignResponse submit(const v1::SubmitCampaignRequest& request);
+  // What submit() would refuse, one message per problem (empty: valid); stores nothing. For a
+  // front end that reports them with its own (the REST gateway's unknown JSON keys).
+  std::vector<std::string> problems(const v1::SubmitCampaignRequest& request) const;
   v1::GetCampaignResponse get(const std::string& id);
   // Sends the campaign now and whenever its job counts change (at most every 500 ms), the
   // last message with full statistics, until it is finished or keep_going() is false.

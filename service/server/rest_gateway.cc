@@ -3,10 +3,15 @@
 #include <httplib.h>
 
 #include <fstream>
+#include <functional>
+#include <vector>
 
 #include <google/protobuf/util/json_util.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+
+#include "proto/bridge/json_fields.h"
+#include "proto/bridge/scenario_bridge.h"
 
 namespace systole::service {
 namespace {
@@ -19,12 +24,27 @@ std::string to_json(const google::protobuf::Message& message) {
   return text;
 }
 
-void parse_body(const std::string& body, google::protobuf::Message* message) {
-  google::protobuf::util::JsonParseOptions options;
-  options.ignore_unknown_fields = false;
-  const auto status = google::protobuf::util::JsonStringToMessage(body.empty() ? "{}" : body, message, options);
-  if (!status.ok())
-    throw ServiceError(grpc::StatusCode::INVALID_ARGUMENT, "invalid JSON body: " + std::string(status.message()));
+// The body (proto3 JSON) → `message`. Every unknown key, at any depth, is named with its path
+// and the nearest allowed names (bridge/json_fields.h); when the rest parsed, `more` adds the
+// request's own problems (a scenario's rules...), so one INVALID_ARGUMENT lists them all.
+void parse_body(const std::string& body, google::protobuf::Message* message,
+                const std::function<std::vector<std::string>()>& more = {}) {
+  bridge::JsonParse parse = bridge::parse_json_message(body, *message);
+  if (parse.problems.empty()) return;
+  if (parse.parsed && more)
+    for (const auto& p : more()) parse.problems.push_back(p);
+  const auto& all = parse.problems;
+  std::string text = all.size() == 1 ? "invalid JSON body: " : "invalid JSON body (" + std::to_string(all.size()) + " problems):\n  ";
+  for (std::size_t i = 0; i < all.size(); ++i) text += (i ? "\n  " : "") + all[i];
+  throw ServiceError(grpc::StatusCode::INVALID_ARGUMENT, text);
+}
+
+// A job request's problems beyond its JSON: the scenario's, each with its path.
+std::vector<std::string> job_problems(const v1::SubmitJobRequest& request) {
+  std::vector<std::string> out;
+  if (!request.has_scenario()) return {"scenario is required"};
+  for (const auto& p : bridge::scenario_problems(request.scenario())) out.push_back("scenario: " + p);
+  return out;
 }
 
 void send_error(httplib::Response& res, grpc::StatusCode code, const std::string& message) {
@@ -102,7 +122,7 @@ RestGateway::RestGateway(JobService& jobs, CampaignService& campaigns, const std
   s.Post("/v1/jobs", [this](const httplib::Request& req, httplib::Response& res) {
     handle(res, [&] {
       v1::SubmitJobRequest request;
-      parse_body(req.body, &request);
+      parse_body(req.body, &request, [&] { return job_problems(request); });
       const auto response = jobs_.submit(request);
       res.status = response.created() ? 201 : 200;
       res.set_content(to_json(response), "application/json");
@@ -182,7 +202,11 @@ RestGateway::RestGateway(JobService& jobs, CampaignService& campaigns, const std
   s.Post("/v1/campaigns", [this](const httplib::Request& req, httplib::Response& res) {
     handle(res, [&] {
       v1::SubmitCampaignRequest request;
-      parse_body(req.body, &request);
+      parse_body(req.body, &request, [&] {
+        std::vector<std::string> out;
+        for (const auto& p : campaigns_.problems(request)) out.push_back(p.rfind("spec", 0) == 0 ? p : "spec: " + p);
+        return out;
+      });
       const auto response = campaigns_.submit(request);
       res.status = response.created() ? 201 : 200;
       res.set_content(to_json(response), "application/json");

@@ -11,6 +11,7 @@
 #include "service/server/sha256.h"
 #include "solver/config/parameter_table.h"
 #include "solver/core/errors.h"
+#include "solver/core/nearest_names.h"
 
 namespace systole::service {
 namespace {
@@ -101,22 +102,26 @@ std::string join(const std::vector<std::string>& items) {
   return out;
 }
 
-// Real-valued fields next to an unknown path (same parent object), to suggest in an error.
+// The nearest real-valued fields (nearest_names.h), then those next to an unknown path (same
+// parent object), to suggest in an error.
 std::string real_fields_near(const std::string& path) {
   const auto dot = path.rfind('.');
   const std::string prefix = dot == std::string::npos ? "" : path.substr(0, dot + 1);
-  std::vector<std::string> near;
+  std::vector<std::string> real, near;
   for (const auto& p : config::parameter_table()) {
     if (p.kind != config::Kind::kReal) continue;
     const std::string candidate(p.path);
+    real.push_back(candidate);
     if (prefix.empty() ? candidate.find('.') == std::string::npos : candidate.rfind(prefix, 0) == 0)
       near.push_back(candidate);
   }
-  return near.empty()
+  const std::string suggestion = did_you_mean(path, real);
+  return (suggestion.empty() ? "" : "; " + suggestion.substr(0, suggestion.size() - 1)) +
+         (near.empty()
              ? ""
              : "; real-valued fields" +
                    (prefix.empty() ? std::string(" at the top level") : " of " + prefix.substr(0, prefix.size() - 1)) +
-                   ": " + join(near);
+                   ": " + join(near));
 }
 
 // A FAILED job that is not worth running again: the worker reported a final (not retryable)

@@ -5,9 +5,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "solver/config/fsei_rules.h"
 #include "solver/config/geometry_rules.h"
 #include "solver/config/parameter_table.h"
 #include "solver/core/errors.h"
+#include "solver/core/nearest_names.h"
 
 namespace systole::config {
 
@@ -139,8 +141,8 @@ void assign(const Param& p, const nlohmann::json& value, Scenario& s,
   }
 }
 
-// Known child names of an object path, for "unknown field" messages.
-std::string known_children(const std::string& prefix) {
+// Known child names of an object path (sorted), for "unknown field" messages.
+std::vector<std::string> child_names(const std::string& prefix) {
   std::set<std::string> names;
   for (const Param& p : parameter_table()) {
     std::string_view path = p.path;
@@ -150,9 +152,18 @@ std::string known_children(const std::string& prefix) {
     }
     names.insert(std::string(path.substr(0, path.find('.'))));
   }
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
+  return {names.begin(), names.end()};
+}
+
+std::string known_children(const std::string& prefix) { return join_names(child_names(prefix)); }
+
+// "unknown field 'a.b'; did you mean 'c'? known fields of a: ..." (the suggestion only when
+// a known name is near: nearest_names.h).
+std::string unknown_field_message(const std::string& path, const std::string& prefix) {
+  const std::string key = prefix.empty() ? path : path.substr(prefix.size() + 1);
+  const std::vector<std::string> known = child_names(prefix);
+  return "unknown field '" + path + "'; " + did_you_mean(key, known) + "known fields" +
+         (prefix.empty() ? std::string("") : " of " + prefix) + ": " + join_names(known);
 }
 
 bool is_object_prefix(const std::string& path) {
@@ -174,9 +185,7 @@ void walk(const nlohmann::json& node, const std::string& prefix, Scenario& s,
         errors.push_back(path + " = " + show(it.value()) + " must be an object with fields: " +
                          known_children(path));
     } else {
-      errors.push_back("unknown field '" + path + "'; known fields" +
-                       (prefix.empty() ? std::string("") : " of " + prefix) + ": " +
-                       known_children(prefix));
+      errors.push_back(unknown_field_message(path, prefix));
     }
   }
 }
@@ -207,6 +216,20 @@ void check_fluid_rules(const Scenario& s, std::vector<std::string>& errors) {
       << " samples; allowed at most 100000: raise outputs.time_series_interval_ms";
     errors.push_back(m.str());
   }
+}
+
+// Scene electromechanics: the EP runs on the heart's walls, in whole steps per synchronisation step.
+void check_electromechanics_rules(const Scenario& s, std::vector<std::string>& errors) {
+  const double ratio = s.electromechanics.sync_step_ms / s.electro.time_step_ms;
+  if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio) {
+    std::ostringstream m;
+    m << "electromechanics.sync_step_ms = " << s.electromechanics.sync_step_ms
+      << " ms must be a whole multiple of electro.time_step_ms = " << s.electro.time_step_ms << " ms";
+    errors.push_back(m.str());
+  }
+  if (s.electro.mesh != "left_heart")
+    errors.push_back("electro.mesh = \"" + s.electro.mesh +
+                     "\" is not allowed in scene electromechanics; allowed: left_heart (the EP runs on the heart's walls)");
 }
 
 // Cross-field rules, after every field is individually in range.
@@ -247,6 +270,8 @@ void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
     fail("electro.mesh = 'manifest' needs electro.mesh_manifest: the path of a mesh manifest (JSON) on the "
          "solver's machine");
   check_fluid_rules(s, errors);
+  if (s.scene == "fsi" || s.scene == "fsei") check_fsei_rules(s, errors);
+  if (s.scene == "electromechanics") check_electromechanics_rules(s, errors);
   bool implemented = false;
   for (const auto& n : implemented_scenes()) implemented = implemented || n == s.scene;
   if (!implemented) {
@@ -294,11 +319,15 @@ Scenario default_scenario() {
   return s;
 }
 
-Scenario parse_scenario(const nlohmann::json& document) {
-  if (!document.is_object())
-    throw InputError("invalid scenario: the document must be a JSON object, got " + show(document));
+namespace {
+
+// parse_scenario's body: the scenario, with every problem appended to `errors`.
+Scenario parse_collecting(const nlohmann::json& document, std::vector<std::string>& errors) {
   Scenario s = default_scenario();
-  std::vector<std::string> errors;
+  if (!document.is_object()) {
+    errors.push_back("the document must be a JSON object, got " + show(document));
+    return s;
+  }
   if (takes_fsei_calibrated_defaults(document)) {
     nlohmann::json layer = nlohmann::json::object();
     const std::string scene = document.at("scene").get<std::string>();
@@ -309,8 +338,22 @@ Scenario parse_scenario(const nlohmann::json& document) {
   }
   walk(document, "", s, errors);
   if (errors.empty()) check_consistency(s, errors);
+  return s;
+}
+
+}  // namespace
+
+Scenario parse_scenario(const nlohmann::json& document) {
+  std::vector<std::string> errors;
+  Scenario s = parse_collecting(document, errors);
   if (!errors.empty()) throw InputError(join_errors(errors));
   return s;
+}
+
+std::vector<std::string> scenario_problems(const nlohmann::json& document) {
+  std::vector<std::string> errors;
+  (void)parse_collecting(document, errors);
+  return errors;
 }
 
 nlohmann::json to_json(const Scenario& scenario) {
@@ -345,9 +388,11 @@ void apply_override(nlohmann::json& document, const std::string& assignment) {
   if (p == nullptr) {
     const auto dot = path.rfind('.');
     const std::string prefix = dot == std::string::npos ? "" : path.substr(0, dot);
-    throw InputError("--set: unknown field '" + path + "'; known fields" +
-                     (prefix.empty() ? std::string("") : " of " + prefix) + ": " +
-                     known_children(is_object_prefix(prefix) ? prefix : ""));
+    if (prefix.empty() || is_object_prefix(prefix)) throw InputError("--set: " + unknown_field_message(path, prefix));
+    std::vector<std::string> paths;
+    for (const Param& q : parameter_table()) paths.emplace_back(q.path);
+    throw InputError("--set: unknown field '" + path + "'; " + did_you_mean(path, paths) +
+                     "known fields: " + known_children(""));
   }
   nlohmann::json value;
   auto number = [&](const std::string& t) -> nlohmann::json {

@@ -280,6 +280,10 @@ Scenario default_scenario();
 // message has one line per problem, each naming the field, the value and what is allowed.
 Scenario parse_scenario(const nlohmann::json& document);
 
+// Every problem parse_scenario() would throw, one message per problem; empty for a valid
+// document. For callers that report a scenario's problems together with their own.
+std::vector<std::string> scenario_problems(const nlohmann::json& document);
+
 // The complete scenario (every field, defaults expanded) as JSON: provenance and caching key.
 nlohmann::json to_json(const Scenario& scenario);
 

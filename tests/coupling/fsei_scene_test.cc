@@ -158,6 +158,12 @@ std::string parse_error_of(const std::string& scene, nlohmann::json doc) {
   return "no error";
 }
 
+// The same on the table's own defaults (fsei.defaults = seed).
+std::string seed_parse_error_of(const std::string& scene, nlohmann::json doc) {
+  doc["fsei"]["defaults"] = "seed";
+  return parse_error_of(scene, std::move(doc));
+}
+
 std::string error_of(const config::Scenario& s) {
   Quiet control;
   try {
@@ -369,8 +375,10 @@ TEST(ChamberCells, TheLvsAndTheLasCellsFillTheirCavities) {
 }
 
 TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
-  // A grid too coarse for the valves: the message gives the minimum.
-  const std::string coarse = error_of(seed_scenario("fsi", {{"fsei", {{"resolution", "custom"}}}, {"fluid", {{"nx", 33}, {"ny", 33}, {"nz", 37}}}}));
+  // A grid too coarse for the valves: the message gives the minimum. This and the other rules
+  // that depend only on the scenario are config's (solver/config/fsei_rules.h): refused at parsing.
+  const std::string coarse =
+      seed_parse_error_of("fsi", {{"fsei", {{"resolution", "custom"}}}, {"fluid", {{"nx", 33}, {"ny", 33}, {"nz", 37}}}});
   EXPECT_NE(coarse.find("too coarse for the valves"), std::string::npos) << coarse;
   EXPECT_NE(coarse.find("at least 8 are needed"), std::string::npos) << coarse;
   // A Darcy region reaching out of the descending aorta's straight tube: refused with the longest that fits.
@@ -383,20 +391,20 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   EXPECT_NE(box.find("box"), std::string::npos) << box;
   // fsei: the synchronisation step must be a whole number of EP steps.
   const std::string sync =
-      error_of(seed_scenario("fsei", {{"fsei", {{"sync_step_ms", 0.075}}}, {"electro", {{"time_step_ms", 0.05}}}}));
+      seed_parse_error_of("fsei", {{"fsei", {{"sync_step_ms", 0.075}}}, {"electro", {{"time_step_ms", 0.05}}}});
   EXPECT_NE(sync.find("fsei.sync_step_ms = 0.075"), std::string::npos) << sync;
   EXPECT_NE(sync.find("whole multiple of electro.time_step_ms"), std::string::npos) << sync;
   // The pre-stress's share without the pre-stress.
-  const std::string share = error_of(seed_scenario("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}}));
+  const std::string share = seed_parse_error_of("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}});
   EXPECT_NE(share.find("fsei.aortic_prestress_fraction = 0.25"), std::string::npos) << share;
   EXPECT_NE(share.find("needs fsei.aortic_pretension = \"prestress\""), std::string::npos) << share;
   // The mitral limiter's window without the limiter; a window outside (0, 1].
-  const std::string window = error_of(
-      seed_scenario("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}}));
+  const std::string window =
+      seed_parse_error_of("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}});
   EXPECT_NE(window.find("structure.mitral_limiter_end_phase = 0.4"), std::string::npos) << window;
   EXPECT_NE(window.find("needs structure.mitral_limiter = true"), std::string::npos) << window;
   // Several fluid steps per interval without intervals that follow the fluid's step.
-  const std::string steps = error_of(seed_scenario("fsi", {{"fsei", {{"fluid_steps_per_interval", 2}}}}));
+  const std::string steps = seed_parse_error_of("fsi", {{"fsei", {{"fluid_steps_per_interval", 2}}}});
   EXPECT_NE(steps.find("fsei.fluid_steps_per_interval = 2 needs fsei.sync_interval = \"fluid_step\""), std::string::npos)
       << steps;
   const std::string zero = parse_error_of("fsi", {{"structure", {{"mitral_limiter_end_phase", 0}}}});
@@ -406,12 +414,12 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   EXPECT_NE(order.find("fsei.coupling_order"), std::string::npos) << order;
   EXPECT_NE(order.find("structure_first"), std::string::npos) << order;
   // The shells-first order without strong coupling.
-  const std::string loose = error_of(seed_scenario("fsi", {{"fsei", {{"coupling_order", "structure_first"}}}}));
+  const std::string loose = seed_parse_error_of("fsi", {{"fsei", {{"coupling_order", "structure_first"}}}});
   EXPECT_NE(loose.find("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"), std::string::npos)
       << loose;
   // The linear first-pass guess in the seed's order (the fluid makes the loads before the
   // shells take them: there is nothing to guess).
-  const std::string guess = error_of(seed_scenario("fsi", {{"fsei", {{"first_pass_predictor", "linear"}, {"strong_coupling", true}}}}));
+  const std::string guess = seed_parse_error_of("fsi", {{"fsei", {{"first_pass_predictor", "linear"}, {"strong_coupling", true}}}});
   EXPECT_NE(guess.find("fsei.first_pass_predictor = \"linear\" needs fsei.coupling_order = \"structure_first\""),
             std::string::npos)
       << guess;

@@ -1,5 +1,7 @@
 // UQ campaigns end to end: real server, real MPI workers, the analytic (Ishigami) scene for
 // exact answers, the 0-D scene for physiology, bad input, failing samples, cache, faults.
+#include <httplib.h>
+
 #include <cmath>
 
 #include "systole/v1/campaign.grpc.pb.h"
@@ -131,7 +133,8 @@ TEST_F(CampaignE2E, BadInputNamesTheOffenderAndStoresNothing) {
   };
   auto spec = zero_d_spec(10, "MONTE_CARLO");
   spec["parameters"][0]["path"] = "lumped.lv.emax";
-  expect_invalid(spec, "parameters[0].path 'lumped.lv.emax' is not a scenario field");
+  expect_invalid(spec, "parameters[0].path 'lumped.lv.emax' is not a scenario field; did you mean "
+                       "'lumped.lv.emax_mmhg_per_ml'?");
   spec = zero_d_spec(10, "MONTE_CARLO");
   spec["parameters"][1] = {{"path", "heart_rate_bpm"}, {"normal", {{"mean", 70}, {"std", 10}}}};
   expect_invalid(spec, "outside the allowed range [20, 240] of heart_rate_bpm");
@@ -140,6 +143,29 @@ TEST_F(CampaignE2E, BadInputNamesTheOffenderAndStoresNothing) {
   spec = zero_d_spec(10, "MONTE_CARLO");
   spec["quantities_of_interest"] = {"ef"};
   expect_invalid(spec, "quantities_of_interest[0] 'ef' is not a metric of scene 'lumped'");
+  spec["quantities_of_interest"] = {"ejection_fraction"};
+  expect_invalid(spec, "'ejection_fraction' is not a metric of scene 'lumped'; did you mean 'ejection_fraction_percent'?");
+  // The base scenario's problems come with the spec's own, each named.
+  spec = zero_d_spec(0, "MONTE_CARLO");
+  spec["base_scenario"]["beats"] = 0;
+  expect_invalid(spec, "base_scenario: beats = 0 is out of range");
+  expect_invalid(spec, "samples = 0 is out of range");
+  // REST: every unknown key of the spec named with a suggestion, with the spec's other problems.
+  {
+    httplib::Client http("127.0.0.1", server_->http_port());
+    nlohmann::json body = {{"spec", zero_d_spec(0, "MONTE_CARLO")}};
+    body["spec"]["parameters"][1]["unifrom"] = body["spec"]["parameters"][1]["uniform"];
+    body["spec"]["parameters"][1].erase("uniform");
+    body["spec"]["base_scenario"]["heart_rate_bmp"] = 70;
+    auto r = http.Post("/v1/campaigns", body.dump(), "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << r->body;
+    const std::string message = nlohmann::json::parse(r->body)["message"];
+    for (const char* part : {"unknown field 'spec.parameters[1].unifrom'; did you mean 'uniform'?",
+                             "unknown field 'spec.base_scenario.heart_rate_bmp'; did you mean 'heart_rate_bpm'?",
+                             "spec: parameters[1] (heart_rate_bpm): no distribution", "spec: samples = 0 is out of range"})
+      EXPECT_NE(message.find(part), std::string::npos) << part << " in " << message;
+  }
   spec = zero_d_spec(10, "MONTE_CARLO");
   spec["parameters"][2] = {{"path", "outputs.metrics"}, {"uniform", {{"min", 0}, {"max", 1}}}};
   expect_invalid(spec, "only real-valued fields can be uncertain");

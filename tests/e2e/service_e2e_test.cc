@@ -293,6 +293,57 @@ TEST_F(ServiceE2E, BadInputGetsClearErrorsAndChangesNothing) {
   EXPECT_EQ(job_count(*server_), before + 1);
 }
 
+// Every rule that depends only on the scenario runs at submit (solver/config/fsei_rules.h): a
+// bad fsi scenario is refused with 400 / INVALID_ARGUMENT naming both fields, and no job is
+// created. A body's misspelt keys are all named, each with its path and a suggestion.
+TEST_F(ServiceE2E, BadFsiScenarioAndMisspeltKeysAreRefusedAtSubmitNamingEveryOne) {
+  const int64_t before = job_count(*server_);
+  httplib::Client http("127.0.0.1", server_->http_port());
+  const std::string loose_shells_first =
+      R"({"scene": "fsi", "fsei": {"defaults": "seed", "coupling_order": "structure_first"}})";
+  auto r = http.Post("/v1/jobs", "{\"scenario\": " + loose_shells_first + "}", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400) << r->body;
+  const std::string message = nlohmann::json::parse(r->body)["message"];
+  std::printf("  [message] %s\n", message.c_str());
+  EXPECT_NE(message.find("fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"), std::string::npos)
+      << message;
+  {  // the same over gRPC
+    v1::SubmitJobRequest request;
+    *request.mutable_scenario() = scenario_from_json(nlohmann::json::parse(loose_shells_first));
+    v1::SubmitJobResponse response;
+    auto context = deadline_context();
+    const auto status = server_->stub().SubmitJob(context.get(), request, &response);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(status.error_message().find("needs fsei.strong_coupling = true"), std::string::npos) << status.error_message();
+  }
+  // Three misspelt keys, and the rule above: four problems in one answer.
+  r = http.Post("/v1/jobs",
+                R"({"scenario": {"scene": "fsi", "heart_rate_bmp": 70,
+                                 "fsei": {"defaults": "seed", "coupling_ordr": "fluid_first",
+                                          "coupling_order": "structure_first", "strong_couplng": true}}})",
+                "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400) << r->body;
+  const nlohmann::json body = nlohmann::json::parse(r->body);
+  EXPECT_EQ(body["code"], 3);
+  const std::string all = body["message"];
+  std::printf("  [message] %s\n", all.c_str());
+  EXPECT_NE(all.find("(4 problems)"), std::string::npos) << all;
+  EXPECT_NE(all.find("unknown field 'scenario.heart_rate_bmp'; did you mean 'heart_rate_bpm'? allowed: "), std::string::npos)
+      << all;
+  EXPECT_NE(all.find("unknown field 'scenario.fsei.coupling_ordr'; did you mean 'coupling_order'? allowed: "),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("unknown field 'scenario.fsei.strong_couplng'; did you mean 'strong_coupling'? allowed: "),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("scenario: fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"),
+            std::string::npos)
+      << all;
+  EXPECT_EQ(job_count(*server_), before);
+}
+
 TEST_F(ServiceE2E, CliRunStatusListResults) {
   const std::string cli = (bin_dir() / "systole").string() + " --server " + server_->address();
   const fs::path out = dir_ / "cli-out";

@@ -84,7 +84,8 @@ TEST(Config, UnknownFieldsAndChoicesAreRejectedWithTheKnownOnes) {
   EXPECT_NE(unknown.find("unknown field 'heart_rate_bmp'"), std::string::npos) << unknown;
   EXPECT_NE(unknown.find("heart_rate_bpm"), std::string::npos) << unknown;
   const std::string nested = error_of({{"lumped", {{"lv", {{"emax", 2}}}}}});
-  EXPECT_NE(nested.find("unknown field 'lumped.lv.emax'; known fields of lumped.lv: contraction_ms, emax_mmhg_per_ml"),
+  EXPECT_NE(nested.find("unknown field 'lumped.lv.emax'; did you mean 'emax_mmhg_per_ml'? known fields of lumped.lv: "
+                        "contraction_ms, emax_mmhg_per_ml"),
             std::string::npos)
       << nested;
   const std::string model = error_of({{"electro", {{"lv_cell_model", "TTP6"}}}});
