@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     nlohmann::json doc = {{"scene", "fsi"}};
     config::apply_override(doc, "fsei.resolution=" + preset);
     const config::Scenario s = config::parse_scenario(doc);
-    const scene::GridPoints g = scene::fsei_grid_points(s);
+    const config::GridPoints g = config::fsei_grid_points(s);
     // the cells' centres as the scene places them: spacing box / points per axis (a MAC grid of
     // n cells per axis over the box, as grid::Grid)
     const double hx = s.fluid.box_x_mm / g.nx, hy = s.fluid.box_y_mm / g.ny, hz = s.fluid.box_z_mm / g.nz;

@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/config/fsei_rules.h"
 #include "solver/config/scenario.h"
 #include "solver/grid/grid.h"
 #include "solver/core/run_result.h"
@@ -39,16 +40,13 @@
 
 namespace systole::scene {
 
-// The grid points (nx, ny, nz) of a resolution preset (in z following fluid.box_z_mm at the
-// preset's spacing); "custom" takes fluid.nx/ny/nz.
-// Throws InputError naming fsei.resolution for an unknown name.
-struct GridPoints {
-  int nx = 0, ny = 0, nz = 0;
-};
-GridPoints fsei_grid_points(const config::Scenario& scenario);
+// The grid points of a resolution preset (config::fsei_grid_points, solver/config/fsei_rules.h).
+using config::GridPoints;
+using config::fsei_grid_points;
 
-// The scene's input rules (InputError naming the field, its value and what is allowed). run_fsei
-// checks them first.
+// The scene's input rules, config::check_fsei_rules (parse_scenario checks them at submit): an
+// InputError naming every offending field, its value and what is allowed. run_fsei checks them
+// first, for a scenario built without parse_scenario.
 void check_fsei_scenario(const config::Scenario& scenario);
 
 // Runs scene "fsei" or "fsi" on MPI_COMM_WORLD (the caller has initialised MPI). Throws

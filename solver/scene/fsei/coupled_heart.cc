@@ -1,9 +1,5 @@
 #include "solver/scene/fsei/coupled_heart.h"
 
-#include <algorithm>
-#include <cmath>
-#include <sstream>
-
 #include "solver/core/errors.h"
 #include "solver/scene/fsei/blood.h"
 #include "solver/scene/fsei/checkpoint.h"
@@ -14,13 +10,6 @@ namespace {
 grid::Grid box_grid(const config::Scenario& s, const GridPoints& pts) {
   return grid::Grid({pts.nx - 1, pts.ny - 1, pts.nz - 1, s.fluid.box_x_mm / kDmMm, s.fluid.box_y_mm / kDmMm,
                      s.fluid.box_z_mm / kDmMm});
-}
-
-// The heart in its box (build_left_heart checks the fit), on a grid that resolves its valves.
-geometry::LeftHeart heart_on_grid(const config::Scenario& s, const GridPoints& pts, const grid::Grid& g) {
-  geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
-  check_grid_resolves_valves(s, pts, g, heart);
-  return heart;
 }
 
 std::vector<Link> heart_markers(const config::Scenario& s, const geometry::LeftHeart& heart, ibm::Markers& markers) {
@@ -52,27 +41,11 @@ Resume find_resume_point(const config::Scenario& s, const std::filesystem::path&
   return r;
 }
 
-void check_grid_resolves_valves(const config::Scenario& s, const GridPoints& pts, const grid::Grid& g,
-                                const geometry::LeftHeart& heart) {
-  const double h_mm = std::max({g.dx(), g.dy(), g.dz()}) * kDmMm;
-  const double d_mm = 2 * heart.plane.aortic_radius_mm;
-  if (d_mm >= kMinCellsAcrossAorticOrifice * h_mm) return;
-  const double h_max = d_mm / kMinCellsAcrossAorticOrifice;
-  std::ostringstream m;
-  m << "fsei.resolution = \"" << s.fsei.resolution << "\" (" << pts.nx << " x " << pts.ny << " x " << pts.nz
-    << " points) is too coarse for the valves: the aortic orifice (diameter " << d_mm << " mm) spans " << d_mm / h_mm
-    << " cells of " << h_mm << " mm; at least " << kMinCellsAcrossAorticOrifice << " are needed (spacing <= " << h_max
-    << " mm: at least " << static_cast<int>(std::ceil(s.fluid.box_x_mm / h_max)) + 1 << " x "
-    << static_cast<int>(std::ceil(s.fluid.box_y_mm / h_max)) + 1 << " x "
-    << static_cast<int>(std::ceil(s.fluid.box_z_mm / h_max)) + 1 << " points)";
-  throw InputError(m.str());
-}
-
 CoupledHeart::CoupledHeart(const config::Scenario& scenario, const Resume& resume)
     : s(scenario),
       points(fsei_grid_points(s)),
       grid(box_grid(s, points)),
-      heart(heart_on_grid(s, points, grid)),
+      heart(geometry::build_left_heart(s.geometry, s.fluid)),  // checks the fit in the box
       group(build_shells(s, heart)),
       aorta(s, group),
       markers(grid),

@@ -34,12 +34,6 @@ struct Resume {
 // checkpoint of another scenario or one past end_ms.
 Resume find_resume_point(const config::Scenario& s, const std::filesystem::path& checkpoint_root, double end_ms);
 
-// InputError when the grid cannot tell the closed aortic cusps from the open orifice: the
-// orifice must span kMinCellsAcrossAorticOrifice cells of the largest spacing (ours).
-inline constexpr double kMinCellsAcrossAorticOrifice = 8;
-void check_grid_resolves_valves(const config::Scenario& s, const GridPoints& pts, const grid::Grid& g,
-                                const geometry::LeftHeart& heart);
-
 class CoupledHeart {
  public:
   CoupledHeart(const config::Scenario& s, const Resume& resume);
