@@ -42,8 +42,8 @@
 #include "solver/geometry/diagnostics.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/scene/chamber_walls.h"
-#include "solver/scene/electro_scene.h"
 #include "solver/scene/h5_dataset.h"
+#include "solver/scene/left_heart_ep.h"
 #include "solver/structure/shell.h"
 
 namespace systole::scene {
@@ -202,7 +202,7 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   const geometry::TriMesh& la_mesh = heart.body(geometry::kLaBody);
   const bool la_shell = em.la_chamber == "shell";
 
-  // 2. EP on the LV and LA walls (the electro scene's set-up)
+  // 2. EP on the LV and LA walls (left_heart_ep.h: the set-up scene electro uses too)
   LeftHeartEp ep = left_heart_ep(scenario, lv_mesh, la_mesh);
   const std::vector<std::array<std::int32_t, 2>> source = ep.mesh.source_node;
   electro::TissueSolver tissue(std::move(ep.mesh), std::move(ep.options));
