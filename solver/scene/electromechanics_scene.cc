@@ -181,20 +181,31 @@ const std::vector<std::string>& electromechanics_metric_names() {
   return names;
 }
 
+void check_electromechanics(const config::Scenario& scenario, std::vector<std::string>& problems) {
+  const double sync_ms = scenario.electromechanics.sync_step_ms;
+  const double ep_dt = scenario.electro.time_step_ms;
+  const double ratio = sync_ms / ep_dt;
+  if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
+    problems.push_back("electromechanics.sync_step_ms = " + std::to_string(sync_ms) +
+                       " ms must be a whole multiple of electro.time_step_ms = " + std::to_string(ep_dt) + " ms");
+  if (scenario.electro.mesh != "left_heart")
+    problems.push_back("electromechanics needs electro.mesh = \"left_heart\" (got \"" + scenario.electro.mesh + "\")");
+}
+
 RunResult run_electromechanics(const config::Scenario& scenario, RunControl& control,
                                const ElectromechanicsHooks& hooks) {
   const config::Electromechanics& em = scenario.electromechanics;
   const double period_ms = scenario.period_ms();
   const double sync_ms = em.sync_step_ms;
-  const double ep_dt = scenario.electro.time_step_ms;
   {
-    const double ratio = sync_ms / ep_dt;
-    if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
-      throw InputError("electromechanics.sync_step_ms = " + std::to_string(sync_ms) +
-                       " ms must be a whole multiple of electro.time_step_ms = " + std::to_string(ep_dt) + " ms");
+    std::vector<std::string> problems;
+    check_electromechanics(scenario, problems);
+    if (!problems.empty()) {
+      std::string all;
+      for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
+      throw InputError(all);
+    }
   }
-  if (scenario.electro.mesh != "left_heart")
-    throw InputError("electromechanics needs electro.mesh = \"left_heart\" (got \"" + scenario.electro.mesh + "\")");
 
   // 1. geometry: the procedural left heart (LV, LA, the valvular plane's anchors)
   const geometry::LeftHeart heart = geometry::build_left_heart(scenario.geometry, scenario.fluid);

@@ -1,11 +1,10 @@
 #pragma once
 // The composition root: a scenario names a scene, and the scene assembles exactly the
-// physics modules it needs. Today: "lumped" (0-D closed-loop left heart, solver/lumped),
-// "analytic" (closed-form test functions), "fluid" (the verification flows of solver/fluid),
-// "electro" (solver/electro alone), "mechanics" (solver/structure alone) and "ibm" (fluid +
-// immersed boundary verification flows). solver/scene/README.md lists what each assembles.
-// Every rank of an MPI worker calls run() with the same scenario; RunControl is how the
-// caller sees progress and asks for a stop (run_control.h).
+// physics modules it needs. The scenes are the rows of registry.h's table (name, run, metric
+// names, checks, one line of description); solver/scene/README.md lists what each assembles
+// and `systole-solve --list-scenes` prints the table. Every rank of an MPI worker calls run()
+// with the same scenario; RunControl (run_control.h) is how the caller sees progress and asks
+// for a stop.
 #include <string>
 #include <vector>
 
@@ -16,7 +15,8 @@
 namespace systole::scene {
 
 // Runs the scenario's scene to completion. Throws Cancelled, systole::InstabilityError (a run
-// that blew up, with its diagnosis; never a NaN result), or systole::InputError.
+// that blew up, with its diagnosis; never a NaN result), or systole::InputError (an unknown
+// scene, or the problems its registry entry's check found, all of them in one message).
 // Adds metrics["wall_time_s"] (this run's wall-clock time).
 RunResult run(const config::Scenario& scenario, RunControl& control);
 
