@@ -3,6 +3,7 @@
 // runs the scene, rank 0 writes). Tests and benchmarks use it.
 //   systole-solve SCENARIO.json --out DIR [--checkpoint-dir DIR] [--set path=value ...]
 //   systole-solve --list-parameters        (the Markdown reference, docs/parameters.md)
+//   systole-solve --list-scenes            (the scene registry: name, metric count, description)
 #include <mpi.h>
 
 #include <chrono>
@@ -18,6 +19,7 @@
 #include "solver/core/errors.h"
 #include "solver/core/threads.h"
 #include "solver/io/result_writer.h"
+#include "solver/scene/registry.h"
 #include "solver/scene/scene.h"
 
 using namespace systole;
@@ -49,6 +51,14 @@ class ConsoleControl final : public scene::RunControl {
   std::filesystem::path out_, checkpoint_;
 };
 
+// The scene registry (solver/scene/registry.h) as a table: one line per scene.
+void print_scenes(std::ostream& out) {
+  out << std::left << std::setw(18) << "scene" << std::right << std::setw(7) << "metrics" << "  description\n";
+  for (const scene::SceneEntry& e : scene::scene_registry())
+    out << std::left << std::setw(18) << e.name << std::right << std::setw(7) << e.metric_names().size() << "  "
+        << e.description << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,7 +72,7 @@ int main(int argc, char** argv) {
   CLI::App app{"systole-solve: run a systole scenario locally and write its results"};
   std::string file, out_dir, checkpoint_dir;
   std::vector<std::string> sets;
-  bool list_parameters = false, quiet = false;
+  bool list_parameters = false, list_scenes = false, quiet = false;
   app.add_option("scenario", file, "scenario JSON file (proto3 JSON)");
   app.add_option("--out", out_dir, "output directory");
   app.add_option("--checkpoint-dir", checkpoint_dir,
@@ -70,6 +80,7 @@ int main(int argc, char** argv) {
                  "found here");
   app.add_option("--set", sets, "override a field: path.to.field=value (repeatable)");
   app.add_flag("--list-parameters", list_parameters, "print the parameter reference (Markdown) and exit");
+  app.add_flag("--list-scenes", list_scenes, "print the scenes (name, metric count, description) and exit");
   app.add_flag("--quiet", quiet, "no per-beat progress on stderr");
   try {
     app.parse(argc, argv);
@@ -79,11 +90,13 @@ int main(int argc, char** argv) {
     return code;
   }
   const OpenMpThreads omp = share_cores_among_ranks(MPI_COMM_WORLD);  // collective; solver/core/threads.h
-  if (rank == 0 && !quiet && !list_parameters) std::cerr << "systole-solve: " << omp.describe() << "\n";
+  if (rank == 0 && !quiet && !list_parameters && !list_scenes) std::cerr << "systole-solve: " << omp.describe() << "\n";
   int code = 0;
   try {
     if (list_parameters) {
       if (rank == 0) std::cout << config::parameters_markdown();
+    } else if (list_scenes) {
+      if (rank == 0) print_scenes(std::cout);
     } else {
       if (file.empty() || out_dir.empty()) throw InputError("usage: systole-solve SCENARIO.json --out DIR [--set path=value ...]");
       const config::Scenario scenario = bridge::validate(bridge::load_scenario_file(file, sets));

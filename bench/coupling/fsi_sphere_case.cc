@@ -1,4 +1,4 @@
-// Runs the membrane sphere of solver/scene/fsi_sphere.h with options given as key=value and
+// Runs the membrane sphere of solver/scene/rigs/fsi_sphere.h with options given as key=value and
 // prints V/V0 over time and the run's counts (docs/fsei.md, the leak and stability table).
 //   fsi_sphere_case [cells=32] [carry_over=1] [forcing_iterations=1] [strong=0] [end_ms=60] ...
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include <mpi.h>
 
 #include "solver/core/errors.h"
-#include "solver/scene/fsi_sphere.h"
+#include "solver/scene/rigs/fsi_sphere.h"
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);

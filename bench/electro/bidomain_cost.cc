@@ -21,7 +21,7 @@
 #include "solver/electro/node_pair_ldlt.h"
 #include "solver/electro/tissue.h"
 #include "solver/geometry/left_heart.h"
-#include "solver/scene/electro_scene.h"
+#include "solver/scene/left_heart_ep.h"
 
 using namespace systole;
 using namespace systole::electro;

@@ -16,7 +16,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
-#include "solver/scene/aorta_inflation.h"
+#include "solver/scene/rigs/aorta_inflation.h"
 
 using namespace systole;
 

@@ -21,7 +21,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
-#include "solver/scene/valve_load.h"
+#include "solver/scene/rigs/valve_load.h"
 
 using namespace systole;
 

@@ -42,8 +42,8 @@
 #include "solver/geometry/diagnostics.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/scene/chamber_walls.h"
-#include "solver/scene/electro_scene.h"
 #include "solver/scene/h5_dataset.h"
+#include "solver/scene/left_heart_ep.h"
 #include "solver/structure/shell.h"
 
 namespace systole::scene {
@@ -181,20 +181,31 @@ const std::vector<std::string>& electromechanics_metric_names() {
   return names;
 }
 
+void check_electromechanics(const config::Scenario& scenario, std::vector<std::string>& problems) {
+  const double sync_ms = scenario.electromechanics.sync_step_ms;
+  const double ep_dt = scenario.electro.time_step_ms;
+  const double ratio = sync_ms / ep_dt;
+  if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
+    problems.push_back("electromechanics.sync_step_ms = " + std::to_string(sync_ms) +
+                       " ms must be a whole multiple of electro.time_step_ms = " + std::to_string(ep_dt) + " ms");
+  if (scenario.electro.mesh != "left_heart")
+    problems.push_back("electromechanics needs electro.mesh = \"left_heart\" (got \"" + scenario.electro.mesh + "\")");
+}
+
 RunResult run_electromechanics(const config::Scenario& scenario, RunControl& control,
                                const ElectromechanicsHooks& hooks) {
   const config::Electromechanics& em = scenario.electromechanics;
   const double period_ms = scenario.period_ms();
   const double sync_ms = em.sync_step_ms;
-  const double ep_dt = scenario.electro.time_step_ms;
   {
-    const double ratio = sync_ms / ep_dt;
-    if (ratio < 1 - 1e-9 || std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
-      throw InputError("electromechanics.sync_step_ms = " + std::to_string(sync_ms) +
-                       " ms must be a whole multiple of electro.time_step_ms = " + std::to_string(ep_dt) + " ms");
+    std::vector<std::string> problems;
+    check_electromechanics(scenario, problems);
+    if (!problems.empty()) {
+      std::string all;
+      for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
+      throw InputError(all);
+    }
   }
-  if (scenario.electro.mesh != "left_heart")
-    throw InputError("electromechanics needs electro.mesh = \"left_heart\" (got \"" + scenario.electro.mesh + "\")");
 
   // 1. geometry: the procedural left heart (LV, LA, the valvular plane's anchors)
   const geometry::LeftHeart heart = geometry::build_left_heart(scenario.geometry, scenario.fluid);
@@ -202,7 +213,7 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   const geometry::TriMesh& la_mesh = heart.body(geometry::kLaBody);
   const bool la_shell = em.la_chamber == "shell";
 
-  // 2. EP on the LV and LA walls (the electro scene's set-up)
+  // 2. EP on the LV and LA walls (left_heart_ep.h: the set-up scene electro uses too)
   LeftHeartEp ep = left_heart_ep(scenario, lv_mesh, la_mesh);
   const std::vector<std::array<std::int32_t, 2>> source = ep.mesh.source_node;
   electro::TissueSolver tissue(std::move(ep.mesh), std::move(ep.options));

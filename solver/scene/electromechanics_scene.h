@@ -8,7 +8,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/core/run_result.h"
-#include "solver/scene/scene.h"
+#include "solver/scene/run_control.h"
 
 namespace systole::scene {
 
@@ -18,6 +18,12 @@ struct ElectromechanicsHooks {
   // stability study shows the structure then stops itself with a diagnosis).
   double step_limit_factor = 1.0;
 };
+
+// The scene's own rules on the scenario (electromechanics.sync_step_ms a whole multiple of
+// electro.time_step_ms; electro.mesh = "left_heart"), one line per problem appended to
+// `problems`, each naming its field. run_electromechanics refuses a scenario that has any
+// (InputError naming them all); registry.h lists it as the scene's check.
+void check_electromechanics(const config::Scenario& scenario, std::vector<std::string>& problems);
 
 RunResult run_electromechanics(const config::Scenario& scenario, RunControl& control,
                                const ElectromechanicsHooks& hooks = {});

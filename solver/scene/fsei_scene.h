@@ -36,7 +36,7 @@
 #include "solver/config/scenario.h"
 #include "solver/grid/grid.h"
 #include "solver/core/run_result.h"
-#include "solver/scene/scene.h"
+#include "solver/scene/run_control.h"
 
 namespace systole::scene {
 

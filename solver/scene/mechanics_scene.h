@@ -12,7 +12,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/core/run_result.h"
-#include "solver/scene/scene.h"
+#include "solver/scene/run_control.h"
 
 namespace systole::scene {
 

@@ -1,4 +1,4 @@
-// Fluid–structure coupling of issue #9 on the smallest case that has both (solver/scene/fsi_sphere.h):
+// Fluid–structure coupling of issue #9 on the smallest case that has both (solver/scene/rigs/fsi_sphere.h):
 // a closed elastic membrane pre-stretched by 10 % and released at rest in blood at rest, fluid +
 // immersed boundary + shell through the scheduler. The enclosed blood is incompressible, so the
 // membrane cannot shrink back to its rest size: its volume must stay close to the initial one,
@@ -10,7 +10,7 @@
 #include <cstdio>
 
 #include "solver/core/errors.h"
-#include "solver/scene/fsi_sphere.h"
+#include "solver/scene/rigs/fsi_sphere.h"
 
 namespace systole::scene {
 namespace {

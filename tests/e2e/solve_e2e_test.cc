@@ -53,6 +53,33 @@ TEST(SolveE2E, PlotBeatDrawsTheWiggersDiagramAndThePvLoop) {
   fs::remove_all(dir);
 }
 
+TEST(SolveE2E, ListScenesPrintsTheRegistry) {
+  const std::string solve = (bin_dir() / "systole-solve").string();
+  // stdout only (the table); stderr (MPI's notes, if any) is not part of it.
+  auto [code, output] = run_command("(" + solve + " --list-scenes 2>/dev/null)");
+  ASSERT_EQ(code, 0) << output;
+  std::istringstream lines(output);
+  std::string line;
+  std::vector<std::string> names;
+  std::getline(lines, line);
+  EXPECT_EQ(line.rfind("scene", 0), 0u) << line;  // the header
+  while (std::getline(lines, line)) {
+    std::istringstream row(line);
+    std::string name;
+    int metrics = 0;
+    row >> name >> metrics;
+    EXPECT_GT(metrics, 0) << line;
+    std::string description;
+    std::getline(row, description);
+    EXPECT_GT(description.size(), 10u) << line;
+    names.push_back(name);
+  }
+  // The registry's rows (tests/unit/scene_test.cc checks they are config::implemented_scenes()).
+  const std::vector<std::string> expected{"lumped", "analytic", "fluid", "electro", "mechanics",
+                                          "ibm", "electromechanics", "fsi", "fsei"};
+  EXPECT_EQ(names, expected) << output;
+}
+
 TEST(SolveE2E, BadInputExitsTwoNamingTheField) {
   const std::string solve = (bin_dir() / "systole-solve").string();
   const std::string scenario = (source_dir() / "examples/healthy-0d.json").string();

@@ -10,7 +10,7 @@
 
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
-#include "solver/scene/aorta_inflation.h"
+#include "solver/scene/rigs/aorta_inflation.h"
 
 namespace systole {
 namespace {

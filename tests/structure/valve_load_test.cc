@@ -13,7 +13,7 @@
 #include "solver/core/errors.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/scene/chamber_walls.h"
-#include "solver/scene/valve_load.h"
+#include "solver/scene/rigs/valve_load.h"
 #include "solver/structure/shell.h"
 
 namespace systole {

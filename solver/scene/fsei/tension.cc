@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "solver/scene/chamber_walls.h"
-#include "solver/scene/electro_scene.h"
+#include "solver/scene/left_heart_ep.h"
 #include "solver/scene/fsei/bodies.h"
 #include "solver/scene/fsei_scene.h"
 

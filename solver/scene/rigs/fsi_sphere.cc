@@ -1,4 +1,4 @@
-#include "solver/scene/fsi_sphere.h"
+#include "solver/scene/rigs/fsi_sphere.h"
 
 #include <algorithm>
 #include <cmath>

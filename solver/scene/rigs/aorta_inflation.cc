@@ -1,4 +1,4 @@
-#include "solver/scene/aorta_inflation.h"
+#include "solver/scene/rigs/aorta_inflation.h"
 
 #include <algorithm>
 #include <cmath>

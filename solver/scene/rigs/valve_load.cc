@@ -1,4 +1,4 @@
-#include "solver/scene/valve_load.h"
+#include "solver/scene/rigs/valve_load.h"
 
 #include <algorithm>
 #include <cmath>
