@@ -4,7 +4,7 @@
 // outer load). The dry counterpart of the afterload of scenes fsi and fsei (docs/fsei.md).
 //   aorta_compliance [fraction=1] [ground_mmhg=60] [from_mmhg=40] [to_mmhg=140] [step_mmhg=10]
 //                    [damping_per_ms=0.5] [path=value ...]
-// fraction 1 is fsei.aortic_pretension = prestress, 0 the outer load. The pressures are held in
+// fraction 1 is fsei.aorta.pretension = prestress, 0 the outer load. The pressures are held in
 // the order ground, ground + step, ..., to, then ground - step, ..., from (each from the settled
 // state of the one before; the descent restarts from the ground pressure). Prints per level:
 // pressure, volume change from the built shape, the compliance against the previous level,

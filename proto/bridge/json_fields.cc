@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <optional>
 
 #include <google/protobuf/util/json_util.h>
 #include <nlohmann/json.hpp>
 
+#include "solver/config/removed_fields.h"
 #include "solver/core/nearest_names.h"
 
 namespace systole::bridge {
@@ -37,12 +39,44 @@ std::string unknown_field_message(const std::string& path, const std::string& ke
   return "unknown field '" + path + "'; " + did_you_mean(key, styled) + "allowed: " + join_names(names);
 }
 
+// A key's snake_case field name ("forcingKernel" -> "forcing_kernel"): a removed field has no
+// descriptor left to give its json_name.
+std::string snake_case(const std::string& key) {
+  std::string out;
+  for (char c : key) {
+    if (std::isupper(static_cast<unsigned char>(c))) {
+      out += '_';
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// The message for an unknown key: a field of a systole.v1.Scenario that was removed or moved
+// (solver/config/removed_fields.h) says so and why; any other gets the nearest allowed names.
+// `scenario_path`: the key's path inside the nearest enclosing Scenario ("fsei.forcing_kernel"),
+// empty outside one.
+std::string unknown_key_message(const std::string& at, const std::string& key, const Descriptor& type,
+                                 const std::string& scenario_path) {
+  if (!scenario_path.empty())
+    if (const config::RemovedField* gone = config::find_removed_field(scenario_path)) {
+      const std::string m = config::removed_field_message(*gone);
+      return at == gone->path ? m : at + ": " + m;
+    }
+  return unknown_field_message(at, key, type);
+}
+
+bool is_scenario(const Descriptor& type) { return type.full_name() == "systole.v1.Scenario"; }
+
 json known_fields_only(const json& object, const Descriptor& type, const std::string& path,
-                       std::vector<std::string>& problems);
+                       const std::optional<std::string>& scenario_prefix, std::vector<std::string>& problems);
 
 // A field's value with the unknown keys of the messages inside it removed (and reported).
+// `scenario_path`: the field's path inside the enclosing Scenario, if any.
 json known_value(const FieldDescriptor& field, const json& value, const std::string& path,
-                 std::vector<std::string>& problems) {
+                 const std::optional<std::string>& scenario_path, std::vector<std::string>& problems) {
   const Descriptor* type = field.message_type();
   if (type == nullptr || is_well_known(*type)) return value;
   if (field.is_map()) {
@@ -51,7 +85,7 @@ json known_value(const FieldDescriptor& field, const json& value, const std::str
     json out = json::object();
     for (auto it = value.begin(); it != value.end(); ++it)
       out[it.key()] = it.value().is_object()
-                          ? known_fields_only(it.value(), *value_type, path + "." + it.key(), problems)
+                          ? known_fields_only(it.value(), *value_type, path + "." + it.key(), std::nullopt, problems)
                           : it.value();
     return out;
   }
@@ -60,25 +94,33 @@ json known_value(const FieldDescriptor& field, const json& value, const std::str
     json out = json::array();
     for (std::size_t i = 0; i < value.size(); ++i)
       out.push_back(value[i].is_object()
-                        ? known_fields_only(value[i], *type, path + "[" + std::to_string(i) + "]", problems)
+                        ? known_fields_only(value[i], *type, path + "[" + std::to_string(i) + "]", std::nullopt, problems)
                         : value[i]);
     return out;
   }
-  return value.is_object() ? known_fields_only(value, *type, path, problems) : value;
+  return value.is_object() ? known_fields_only(value, *type, path, scenario_path, problems) : value;
 }
 
 // `object` without its unknown keys, each reported in `problems` with its path.
+// `scenario_prefix`: the object's path inside the enclosing Scenario ("" for the Scenario
+// itself), none outside one.
 json known_fields_only(const json& object, const Descriptor& type, const std::string& path,
-                       std::vector<std::string>& problems) {
+                       const std::optional<std::string>& scenario_prefix, std::vector<std::string>& problems) {
+  const std::optional<std::string> prefix = is_scenario(type) ? std::optional<std::string>("") : scenario_prefix;
   json out = json::object();
   for (auto it = object.begin(); it != object.end(); ++it) {
     const std::string at = path.empty() ? it.key() : path + "." + it.key();
     const FieldDescriptor* field = find_field(type, it.key());
+    std::optional<std::string> inside;
+    if (prefix) {
+      const std::string name = field != nullptr ? field->name() : snake_case(it.key());
+      inside = prefix->empty() ? name : *prefix + "." + name;
+    }
     if (field == nullptr) {
-      problems.push_back(unknown_field_message(at, it.key(), type));
+      problems.push_back(unknown_key_message(at, it.key(), type, inside.value_or("")));
       continue;
     }
-    out[it.key()] = known_value(*field, it.value(), at, problems);
+    out[it.key()] = known_value(*field, it.value(), at, inside, problems);
   }
   return out;
 }
@@ -113,7 +155,7 @@ JsonParse parse_json_message(const std::string& text, google::protobuf::Message&
                            "), got a JSON " + document.type_name());
     return out;
   }
-  const json known = known_fields_only(document, *message.GetDescriptor(), "", out.problems);
+  const json known = known_fields_only(document, *message.GetDescriptor(), "", std::nullopt, out.problems);
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;  // none are left; a value of the wrong type is still an error
   const auto status = google::protobuf::util::JsonStringToMessage(known.dump(), &message, options);

@@ -14,12 +14,12 @@ namespace {
 // The scene's length scale d_m (MODEL.md §3): the grid's spacing is computed in it, as the scene does.
 constexpr double kDmMm = 1000 * units::kSeedLength_m;
 
-// The aorta's ground pressure: the wall's share of it is a pre-stress's (fsei.aortic_pretension).
+// The aorta's ground pressure: the wall's share of it is a pre-stress's (fsei.aorta.pretension).
 void check_aortic_pretension(const Fsei& fs, std::vector<std::string>& errors) {
-  if (fs.aortic_prestress_fraction == 1 || fs.aortic_pretension == "prestress") return;
+  if (fs.aorta.prestress_fraction == 1 || fs.aorta.pretension == "prestress") return;
   std::ostringstream m;
-  m << "fsei.aortic_prestress_fraction = " << fs.aortic_prestress_fraction
-    << " is the share of the pre-stress: it needs fsei.aortic_pretension = \"prestress\" (got \"" << fs.aortic_pretension
+  m << "fsei.aorta.prestress_fraction = " << fs.aorta.prestress_fraction
+    << " is the share of the pre-stress: it needs fsei.aorta.pretension = \"prestress\" (got \"" << fs.aorta.pretension
     << "\"); with \"outer_load\" leave it at 1";
   errors.push_back(m.str());
 }

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "solver/config/removed_fields.h"
+
 namespace systole::config {
 namespace {
 
@@ -113,7 +115,7 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(tissue.active_tension_k_kpa, "kPa", 340, 0, 1000,
                            "Nash-Panfilov active tension amplitude k_tau (Nash & Panfilov 2004: "
                            "47.9 kPa); 340 calibrated by the electromechanics scene against its 0-D afterload "
-                           "(docs/electromechanics.md); scene fsei in blood: 250 (docs/fsei.md session 31)."));
+                           "(docs/electromechanics.md); scene fsei in blood: 250, at which the LV no longer reaches 170 mmHg by 0.16 T (docs/notes/fsei-notebook.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(tissue.active_tension_time_scale_ms, "ms", 20, 0, 1000,
                                     "Nash-Panfilov time unit t_scale (eq 23): the tension rises with time constant "
                                     "10 t_scale and relaxes with t_scale (Nash & Panfilov 2004: 12.9 ms; 20 ms "
@@ -149,8 +151,8 @@ std::vector<Param> build_table() {
                            "Height of the aortic commissures above the valvular plane, over the aortic orifice "
                            "radius (ours): the cusps hang from a crown-shaped attachment on the root wall, fibres "
                            "from commissure to commissure, with vertical coaptation strips; at least 0.6 (the "
-                           "closed cusps' tips are at 0.5). 0 gives the flat-annulus cusps of sessions 1-7, "
-                           "which do not carry the aortic pressure (docs/geometry.md, docs/fsei.md)."));
+                           "closed cusps' tips are at 0.5). 0 gives the flat-annulus cusps of the first "
+                           "coupled runs, which do not carry the aortic pressure (docs/geometry.md, docs/fsei.md)."));
   t.push_back(SYSTOLE_REAL(geometry.darcy_region_length_per_diameter, "-", 1.5, 0.25, 20,
                            "Length of the Darcy outflow region (scenes 'fsi'/'fsei': the sink -u/k of "
                            "fluid.darcy_permeability) at the end of the thoracic descending aorta, in descending-aorta "
@@ -164,10 +166,10 @@ std::vector<Param> build_table() {
                            "reference) over a rest shape whose free edges and coaptation strips are moved apart by this "
                            "much at the middle (opening/2 (1 - s^2) each, s from commissure to commissure), the leaflet "
                            "length kept; so the closed valve is pre-strained and opens wider at a small pressure "
-                           "(docs/geometry.md, docs/fsei.md session 35). Each rest free edge's middle must stay within "
+                           "(docs/geometry.md, docs/notes/fsei-notebook.md). Each rest free edge's middle must stay within "
                            "3/4 of the mitral radius from the orifice's centre (valve_gap_mm / 2 + opening / 2 <= "
                            "0.75 mitral_diameter_mm / 2: 17 mm at the defaults' gap 1 mm). 0: the leaflets are "
-                           "stress-free closed (sessions 1-34)."));
+                           "stress-free closed (the first geometry)."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_root_diameter_mm, "mm", 40, 15, 70, "Aortic root diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_arch_diameter_mm, "mm", 30, 10, 60, "Aortic arch diameter."));
   t.push_back(SYSTOLE_REAL(geometry.aortic_descending_diameter_mm, "mm", 22, 8, 50,
@@ -292,7 +294,7 @@ std::vector<Param> build_table() {
                              "none: the seed's; vreman: Vreman's model (Phys. Fluids 16, 2004), nu = 1/Re + "
                              "c sqrt(B_beta / (alpha_ij alpha_ij)) from the resolved velocity gradient, zero in "
                              "any unidirectional shear flow, O(dx^2) on smooth flows; it damps the grid-scale "
-                             "velocity of an under-resolved jet (docs/fsei.md, session 26). Newtonian only."));
+                             "velocity of an under-resolved jet (docs/notes/fsei-notebook.md). Newtonian only."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.subgrid_constant, "", 0.07, 0, 1,
                                     "Vreman's constant c (fluid.subgrid_model = vreman); c = 2.5 Cs^2 with the "
                                     "Smagorinsky constant Cs (0.07: Cs = 0.17)."));
@@ -301,8 +303,8 @@ std::vector<Param> build_table() {
                                     "Darcy afterload permeability k, nondimensional (seed 0.001). In scenes 'fsi'/'fsei' "
                                     "the region is the aorta's last 1.5 diameters: Darcy's law over it gives 0.0173/k "
                                     "mmHg s/ml (17 at 0.001, 15x a human's ~1.1); measured in the heart: 6.8 at 0.001 "
-                                    "with MLS's leaky walls, 1.2-1.4 at 0.016 in the tight setting (docs/fsei.md "
-                                    "session 16)."));
+                                    "with MLS's leaky walls, 1.2-1.4 at 0.016 in the tight setting ("
+                                    "docs/notes/fsei-notebook.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fluid.carreau_yasuda_mu0_pa_s, "Pa*s", 0.056, 0, 10,
                                     "Carreau-Yasuda zero-shear viscosity mu0 in mu = mu_inf + (mu0 - mu_inf) "
                                     "[1 + (lambda gamma_dot)^a]^((n-1)/a); blood: Cho & Kensey 1991."));
@@ -457,7 +459,7 @@ std::vector<Param> build_table() {
                            "Area floor of every shell triangle (ours; 0: off, the seed's springs only): below this "
                            "ratio J of its stress-free area a triangle resists with the energy kappa s A0 (J0 - J)^2 / J, "
                            "which grows without bound as J -> 0, so the triangle cannot be squeezed flat in its plane "
-                           "(the springs resist only length changes; docs/fsei.md, session 13)."));
+                           "(the springs resist only length changes; docs/notes/fsei-notebook.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.area_floor_modulus_kpa, "kPa", 10, 0, 1e4,
                                     "Modulus kappa of structure.area_floor (ours)."));
   t.push_back(SYSTOLE_CHOICE(structure.body, "sphere",
@@ -509,8 +511,8 @@ std::vector<Param> build_table() {
                            "relative velocity of a node and the surface point it touches, this fraction of the "
                            "critical damping of the pair's penalty spring (2 zeta sqrt(k mu), mu the pair's reduced "
                            "mass); its normal part never turns the push into a pull, its tangential part resists "
-                           "sliding. Stills the chatter of closed valves pressed together (docs/fsei.md, session "
-                           "36); shortens the contact's stable step by sqrt(1 + zeta^2) - zeta. 0: none."));
+                           "sliding. Stills the chatter of closed valves pressed together (docs/notes/fsei-notebook.md); "
+                           "shortens the contact's stable step by sqrt(1 + zeta^2) - zeta. 0: none."));
   t.push_back(SYSTOLE_BOOL(structure.mitral_limiter, true,
                            "Body 'mitral_leaflets': the seed's limiter of the leaflets' displacement towards the LA "
                            "(no chordae)."));
@@ -521,13 +523,13 @@ std::vector<Param> build_table() {
       "Scenes 'fsi'/'fsei': the mitral limiter holds over the phases t/T in [0, this) of every beat and "
       "releases the leaflets after it (the seed limits them in systole only); 1: all the time (ours). "
       "The limiter blocks the leaflets' opening: they open by swinging about the commissures, which "
-      "lifts their free edges towards the LA (docs/fsei.md, session 17)."));
+      "lifts their free edges towards the LA (docs/notes/fsei-notebook.md)."));
   t.push_back(SYSTOLE_REAL(structure.aortic_cusp_radius_limit, "", 0, 0, 5,
                            "Bodies 'aortic_cusp_*' (scenes 'fsi'/'fsei'): a free cusp node stays within this many "
                            "aortic orifice radii of the valve's axis, or within its stress-free distance if that is "
                            "larger (ours; 0: off). 1 opens the valve to a cylinder of the orifice and keeps the "
                            "cusps off the sinus wall, where the immersed boundary left no blood between them "
-                           "(docs/fsei.md, session 15)."));
+                           "(docs/notes/fsei-notebook.md)."));
   // --- scene "ibm": immersed-boundary verification (nondimensional: D, U, D/U) -----------
   t.push_back(SYSTOLE_CHOICE(ibm.verification_case, "fixed_sphere",
                              (std::vector<std::string_view>{"fixed_sphere", "oscillating_sphere", "womersley_pipe",
@@ -610,8 +612,8 @@ std::vector<Param> build_table() {
                            "fsei.prescribed_la_tension_fraction."));
   t.push_back(SYSTOLE_REAL(fsei.prescribed_la_tension_fraction, "-", 1, 0, 2,
                            "Scene 'fsi': the LA's peak prescribed tension over the LV's (ours; 1: the same "
-                           "peak, as before session 22; at 120 kPa the LA's contraction peaks at 46 mmHg, "
-                           "docs/fsei.md session 22)."));
+                           "peak; at 120 kPa the LA's contraction peaks at 46 mmHg, "
+                           "docs/notes/fsei-notebook.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fsei.probe_radius_mm, "mm", 4, 0, 20,
                                     "Scenes 'fsei'/'fsi': radius of the pressure probe spheres in the LV, LA, aortic "
                                     "root and outer fluid (chamber pressures are their mean pressures, relative to the "
@@ -620,58 +622,83 @@ std::vector<Param> build_table() {
                            "Scenes 'fsei'/'fsi': strong coupling (fluid and structure repeated per interval, "
                            "coupling.strong_tolerance and strong_max_iterations) instead of the seed's loose "
                            "coupling."));
-  t.push_back(SYSTOLE_BOOL(fsei.aortic_outlet_held, true,
-                           "Scenes 'fsei'/'fsi': hold the aorta's Darcy outlet (its last 1.5 diameters) in place "
-                           "(ours: the seed anchors every body to the valvular plane only; held, the descending "
-                           "aorta cannot swing into the box's wall, and the thoracic aorta is tethered to the spine)."));
-  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_factor, "", 1, 0.01, 1,
-                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of the previous step's "
-                           "immersed-boundary force carried over (ours; below 1 the carried force cannot wind up "
-                           "where the forcing cannot remove the slip, at the price of some slip: docs/fsei.md)."));
-  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_increment_share, "", 1, 0.01, 1,
-                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the share of each step's "
-                           "immersed-boundary corrections that the carried force keeps (ours; the force applied "
-                           "in the step is unchanged). The carried force's error falls at a rate per unit of time "
-                           "that scales as this over the step, so a smaller step with this = its ratio to a "
-                           "reference step keeps that step's rate (fsei.forcing_carry_over_reference_cfl sets it "
-                           "per step); a steady load is held as with 1, only more slowly. docs/fsei.md session 44."));
-  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_reference_cfl, "", 0, 0, 1,
-                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: 0 (off), or the CFL target whose "
-                           "step sets the carry-over's rate (ours): each fluid step multiplies "
-                           "fsei.forcing_carry_over_increment_share by min(1, the fluid's stable step at "
-                           "fluid.cfl / its stable step at this CFL), so the carried force's error falls at the "
-                           "reference step's rate per unit of time whatever fluid.cfl (1 where max_dt or the "
-                           "viscous bound sets both steps). docs/fsei.md session 45."));
-  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_cells, "", 0, 0, 4,
-                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: markers within this many grid "
+  // fsei.forcing: the immersed boundary's direct forcing (solver/ibm/forcing.h)
+  t.push_back(SYSTOLE_CHOICE(fsei.forcing.kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
+                             "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
+                             "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "
+                             "quadratic along a velocity component's own direction and linear across, after "
+                             "Gruninger & Griffith 2025; the interpolated velocity has no flux through a closed "
+                             "wall, so the walls stop leaking their volume: FsiSphere.TheDivergenceFreeKernelHoldsTheVolumeTheMlsKernelLoses)."));
+  t.push_back(SYSTOLE_INT(fsei.forcing.iterations, "", 3, 1, 20,
+                          "Scenes 'fsei'/'fsi': direct-forcing passes per fluid step (multi-direct forcing; 3 "
+                          "cut the leak through the heart's walls 7x against the seed's single pass: "
+                          "docs/fsei.md)."));
+  t.push_back(SYSTOLE_BOOL(fsei.forcing.carry_over, false,
+                           "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
+                           "(ours; it made the membrane sphere tight but set off an oscillation in the heart "
+                           "within 10 ms: docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing.carry_over_exclusion_cells, "", 0, 0, 4,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing.carry_over: markers within this many grid "
                            "spacings of another body's markers carry no force over (ours; anti-windup where two "
                            "bodies' targets conflict in one support, e.g. leaflets meeting at a commissure); 0: "
                            "every marker carries. docs/fsei.md."));
-  t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over_exclusion_plane, true,
+  t.push_back(SYSTOLE_BOOL(fsei.forcing.carry_over_exclusion_plane, true,
                            "Scenes 'fsei'/'fsi', with the carry-over's exclusion: true, the rigid valvular plane's "
                            "markers next to another body carry nothing over, as every body's; false, they keep "
                            "their carry-over (ours: the plane is the largest leak left; with MLS a cusp crumpled "
-                           "next to it: docs/fsei.md sessions 12 and 16). The other bodies' markers next to the "
+                           "next to it: docs/notes/fsei-notebook.md). The other bodies' markers next to the "
                            "plane carry none either way."));
-  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_plane_cells, "", 0, 0, 4,
-                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: markers within max(this, "
-                           "fsei.forcing_carry_over_exclusion_cells) grid spacings of the rigid valvular plane's "
+  t.push_back(SYSTOLE_REAL(fsei.forcing.carry_over_exclusion_plane_cells, "", 0, 0, 4,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing.carry_over: markers within max(this, "
+                           "fsei.forcing.carry_over_exclusion_cells) grid spacings of the rigid valvular plane's "
                            "markers carry no force over (ours; a wider anti-windup ring where the chambers' walls "
-                           "meet the plane); 0: the plane as any body. docs/fsei.md session 39."));
-  t.push_back(SYSTOLE_REAL(fsei.forcing_carry_over_exclusion_plane_wall_cells, "", 0, 0, 4,
-                           "Scenes 'fsei'/'fsi', with fsei.forcing_carry_over: the walls' markers (LV, LA, aorta) "
-                           "within max(this, fsei.forcing_carry_over_exclusion_plane_cells, "
-                           "fsei.forcing_carry_over_exclusion_cells) grid spacings of the rigid valvular plane's "
+                           "meet the plane); 0: the plane as any body (docs/notes/fsei-notebook.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing.carry_over_exclusion_plane_wall_cells, "", 0, 0, 4,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing.carry_over: the walls' markers (LV, LA, aorta) "
+                           "within max(this, fsei.forcing.carry_over_exclusion_plane_cells, "
+                           "fsei.forcing.carry_over_exclusion_cells) grid spacings of the rigid valvular plane's "
                            "markers carry no force over (ours); the leaflets and cusps keep the narrower ring, so "
-                           "the closed valves' bases keep their hold; 0: the walls as any body. docs/fsei.md "
-                           "sessions 39 and 40."));
-  t.push_back(SYSTOLE_BOOL(fsei.forcing_row_sum_scaling, false,
-                           "Scenes 'fsei'/'fsi': scale each immersed-boundary forcing pass's correction per marker "
-                           "by 1/max(r, 1/4), r the marker's row sum of interpolation after spreading (ours: a "
-                           "Jacobi-like preconditioning of the passes; r is about 0.5 on a lone body's markers "
-                           "and 1 where two bodies share a kernel support, so each pass removes about all of the "
-                           "smooth slip instead of half). Costs one spreading and one interpolation per step. "
-                           "docs/fsei.md session 44."));
+                           "the closed valves' bases keep their hold; 0: the walls as any body: at 1 h a stiff LA wound up below the "
+                           "plane at 180 bpm; with the ring on every body the closed aortic valve passed 1.22 ml back over the "
+                           "diastole against 0.39 ml on the walls only (docs/notes/fsei-notebook.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.forcing.carry_over_reference_cfl, "", 0, 0, 1,
+                           "Scenes 'fsei'/'fsi', with fsei.forcing.carry_over: 0 (off), or the CFL target whose "
+                           "step sets the carry-over's rate (ours): each fluid step the carried force keeps the share "
+                           "min(1, the fluid's stable step at fluid.cfl / its stable step at this CFL) of the step's "
+                           "forcing corrections (the force applied in the step is unchanged), so the carried force's error falls at the "
+                           "reference step's rate per unit of time whatever fluid.cfl (1 where max_dt or the "
+                           "viscous bound sets both steps). At the seed's CFL 0.2 with 0.4 the stress points that ran away "
+                           "complete (CarryOverIncrementShare.*, docs/notes/fsei-notebook.md)."));
+  // fsei.aorta: the aorta's ground pressure and how it is held
+  t.push_back(SYSTOLE_REAL(fsei.aorta.ground_pressure_mmhg, "mmHg", 60, 0, 150,
+                           "Scenes 'fsei'/'fsi': the aorta's ground pressure (the seed's 60 mmHg pre-tension), "
+                           "held as fsei.aorta.pretension says: an outer pressure on the aorta's wall outside the "
+                           "Darcy region (ours: a follower load, held) with the blood inside the aorta started at "
+                           "it, so the built aorta is in equilibrium; or partly by the wall's pre-stress "
+                           "(fsei.aorta.prestress_fraction) and the outer load the rest (docs/fsei.md)."));
+  t.push_back(SYSTOLE_REAL(fsei.aorta.pressure_ramp_ms, "ms", 0, 0, 200,
+                           "Scenes 'fsei'/'fsi': 0: the aorta's ground pressure is there at t = 0 (blood inside "
+                           "started at it); else the outer load on the aorta's wall rises linearly over this time "
+                           "from the blood at rest (ours: the closed cusps are loaded gradually; docs/fsei.md)."));
+  t.push_back(SYSTOLE_CHOICE(fsei.aorta.pretension, "outer_load",
+                             (std::vector<std::string_view>{"outer_load", "prestress"}),
+                             "Scenes 'fsei'/'fsi': how the aorta's wall holds fsei.aorta.ground_pressure_mmhg (ours; the "
+                             "seed: 'pretensioned by an external force'): outer_load, an outer pressure as large on "
+                             "the wall (the wall stays untensioned); prestress, the wall's springs shortened so that "
+                             "the built aorta is in equilibrium with that pressure inside and none outside "
+                             "(solver/structure/prestress.h; with fsei.aorta.pressure_ramp_ms the shortening is "
+                             "ramped). docs/fsei.md."));
+  t.push_back(SYSTOLE_REAL(fsei.aorta.prestress_fraction, "", 1, 0.05, 1,
+                           "Scenes 'fsei'/'fsi', with fsei.aorta.pretension = prestress: the share of "
+                           "fsei.aorta.ground_pressure_mmhg the aorta's wall carries by its pre-stress; the rest, (1 - share) "
+                           "x the ground pressure, by the outer load (ours: a wall pre-stressed for all of it sits on "
+                           "the stiff part of the Fung law, 0.46 ml/mmHg dry at 60-70 mmHg against 1.05 with the "
+                           "outer load alone, which buckles when the blood's pressure falls below it; "
+                           "bench/structure/aorta_compliance, docs/notes/fsei-notebook.md)."));
+  t.push_back(SYSTOLE_BOOL(fsei.aorta.outlet_held, true,
+                           "Scenes 'fsei'/'fsi': hold the aorta's Darcy outlet (its last 1.5 diameters) in place "
+                           "(ours: the seed anchors every body to the valvular plane only; held, the descending "
+                           "aorta cannot swing into the box's wall, and the thoracic aorta is tethered to the spine)."));
   t.push_back(SYSTOLE_CHOICE(fsei.slab_split, "balanced", (std::vector<std::string_view>{"balanced", "uniform"}),
                              "Scenes 'fsei'/'fsi' on several MPI ranks: how the fluid's z planes are split over the "
                              "ranks: balanced (ours), by each plane's work, its cells plus the immersed boundary's "
@@ -691,16 +718,16 @@ std::vector<Param> build_table() {
                                     "fsei.abort_mean_speed_orifice_ratio x the largest mean velocity through a valve's "
                                     "orifice so far (flow / orifice area) the run stops with the fastest cell, the "
                                     "time and how long the energy took to double. Energy let in by the coupling over "
-                                    "tens of ms trips it where the fluid's per-step guards do not (docs/fsei.md, "
-                                    "sessions 27-28), and so does a blow-up within a few ms (session 38). A guard, not a parameter of "
+                                    "tens of ms trips it where the fluid's per-step guards do not ("
+                                    "docs/notes/fsei-notebook.md), and so does a blow-up within a few ms. A guard, not a parameter of "
                                     "the trajectory: a checkpoint resumes with another value."));
   t.push_back(SYSTOLE_POSITIVE_REAL(fsei.abort_mean_speed_orifice_ratio, "", 1, 0, 100,
                                     "Scenes 'fsei'/'fsi': the slow-runaway guard's second bound (ours; see "
                                     "fsei.abort_mean_speed_m_s): the chambers' mean speed over the largest mean velocity "
                                     "through a valve's orifice so far. Runs through the ejection at 70 and 180 bpm stayed "
-                                    "at 0.69-0.80 of it to 0.4 T, runaways crossed 1 (docs/fsei.md, session 28); a "
+                                    "at 0.69-0.80 of it to 0.4 T, runaways crossed 1 (docs/notes/fsei-notebook.md); a "
                                     "whole 180-bpm beat at the defaults crosses it at 0.48 T, its energy rising while "
-                                    "the flow falls, a real runaway (relaxed to 3 it gained energy to 655 mJ by 189 ms; session 29)."));
+                                    "the flow falls, a real runaway (relaxed to 3 it gained energy to 655 mJ by 189 ms)."));
   t.push_back(SYSTOLE_INT(fsei.fluid_steps_per_interval, "", 1, 1, 8,
                           "Scenes 'fsei'/'fsi' with fsei.sync_interval = fluid_step: each interval is this many "
                           "of the fluid's stable steps at its start (still at most fsei.sync_step_ms; ours): fewer "
@@ -714,63 +741,14 @@ std::vector<Param> build_table() {
                              "those the shells used), so an interval whose loads change less than "
                              "coupling.strong_tolerance ends after one pass instead of two. Alone (with the lagging "
                              "'last' guess) such one-pass intervals let an oscillation of the LV wall and its blood "
-                             "grow in the ejection (docs/fsei.md session 20); with the 'linear' first-pass guess it "
-                             "is part of the fsi/fsei calibrated defaults (sessions 21, 24)."));
+                             "grow in the ejection (docs/notes/fsei-notebook.md); with the 'linear' first-pass guess it "
+                             "is part of the fsi/fsei calibrated defaults."));
   t.push_back(SYSTOLE_CHOICE(fsei.first_pass_predictor, "last", (std::vector<std::string_view>{"last", "linear"}),
                              "Scenes 'fsei'/'fsi' with fsei.coupling_order = structure_first: the loads the shells "
                              "take in an interval's first pass: last (those last written: they lag one interval) "
                              "or linear (ours: extrapolated from the last two intervals' loads, a second-order "
                              "guess; the first pass's residual then measures the guess); linear is part of the "
-                             "fsi/fsei calibrated defaults (docs/fsei.md sessions 21, 24)."));
-  t.push_back(SYSTOLE_CHOICE(fsei.forcing_kernel, "mls", (std::vector<std::string_view>{"mls", "divergence_free"}),
-                             "Scenes 'fsei'/'fsi': the immersed boundary's interpolation and spreading weights: mls "
-                             "(the seed's moving least squares) or divergence_free (ours: composite B-splines, "
-                             "quadratic along a velocity component's own direction and linear across, after "
-                             "Gruninger & Griffith 2025; the interpolated velocity has no flux through a closed "
-                             "wall, so the walls stop leaking their volume: docs/fsei.md, session 14)."));
-  t.push_back(SYSTOLE_CHOICE(fsei.aortic_pretension, "outer_load",
-                             (std::vector<std::string_view>{"outer_load", "prestress"}),
-                             "Scenes 'fsei'/'fsi': how the aorta's wall holds fsei.aortic_pressure_mmhg (ours; the "
-                             "seed: 'pretensioned by an external force'): outer_load, an outer pressure as large on "
-                             "the wall (the wall stays untensioned); prestress, the wall's springs shortened so that "
-                             "the built aorta is in equilibrium with that pressure inside and none outside "
-                             "(solver/structure/prestress.h; with fsei.aortic_pressure_ramp_ms the shortening is "
-                             "ramped). docs/fsei.md."));
-  t.push_back(SYSTOLE_REAL(fsei.aortic_prestress_fraction, "", 1, 0.05, 1,
-                           "Scenes 'fsei'/'fsi', with fsei.aortic_pretension = prestress: the share of "
-                           "fsei.aortic_pressure_mmhg the aorta's wall carries by its pre-stress; the rest, (1 - share) "
-                           "x the ground pressure, by the outer load (ours: a wall pre-stressed for all of it sits on "
-                           "the stiff part of the Fung law, 0.46 ml/mmHg dry at 60-70 mmHg against 1.05 with the "
-                           "outer load alone, which buckles when the blood's pressure falls below it; "
-                           "bench/structure/aorta_compliance, docs/fsei.md session 16)."));
-  t.push_back(SYSTOLE_BOOL(fsei.forcing_carry_over, false,
-                           "Scenes 'fsei'/'fsi': carry the immersed-boundary force over between fluid steps "
-                           "(ours; it made the membrane sphere tight but set off an oscillation in the heart "
-                           "within 10 ms: docs/fsei.md)."));
-  t.push_back(SYSTOLE_INT(fsei.forcing_iterations, "", 3, 1, 20,
-                          "Scenes 'fsei'/'fsi': direct-forcing passes per fluid step (multi-direct forcing; 3 "
-                          "cut the leak through the heart's walls 7x against the seed's single pass: "
-                          "docs/fsei.md)."));
-  t.push_back(SYSTOLE_CHOICE(fsei.marker_tiling, "mean_edge",
-                             (std::vector<std::string_view>{"longest_edge", "mean_edge"}),
-                             "Scenes 'fsei'/'fsi': tiling level of each deformable body: the mean tile edge <= 0.7 h "
-                             "and the longest <= h (mean_edge, ours: 145 k instead of 264 k markers at coarse, the LV "
-                             "pressure at 16 ms within 0.01 %), or every tile edge <= 0.7 h (longest_edge: "
-                             "ibm::Markers' rule; docs/fsei.md)."));
-  t.push_back(SYSTOLE_REAL(fsei.stencil_tolerance_cells, "", 0, 0, 0.5,
-                           "Scenes 'fsei'/'fsi': a body's MLS stencils are rebuilt only once one of its markers "
-                           "moved more than this x h since the last build (ours; 0: after any move; 0.1 saved 20 % "
-                           "of a coarse step and moved the LV pressure at 16 ms by 0.45 %: docs/fsei.md)."));
-  t.push_back(SYSTOLE_REAL(fsei.aortic_pressure_mmhg, "mmHg", 60, 0, 150,
-                           "Scenes 'fsei'/'fsi': the aorta's ground pressure (the seed's 60 mmHg pre-tension), "
-                           "held as fsei.aortic_pretension says: an outer pressure on the aorta's wall outside the "
-                           "Darcy region (ours: a follower load, held) with the blood inside the aorta started at "
-                           "it, so the built aorta is in equilibrium; or partly by the wall's pre-stress "
-                           "(fsei.aortic_prestress_fraction) and the outer load the rest (docs/fsei.md)."));
-  t.push_back(SYSTOLE_REAL(fsei.aortic_pressure_ramp_ms, "ms", 0, 0, 200,
-                           "Scenes 'fsei'/'fsi': 0: the aorta's ground pressure is there at t = 0 (blood inside "
-                           "started at it); else the outer load on the aorta's wall rises linearly over this time "
-                           "from the blood at rest (ours: the closed cusps are loaded gradually; docs/fsei.md)."));
+                             "fsi/fsei calibrated defaults (docs/notes/fsei-notebook.md)."));
   t.push_back(SYSTOLE_REAL(fsei.field_interval_ms, "ms", 0, 0, 1e5,
                            "Scenes 'fsei'/'fsi': 0: no fields; else a frame every this from t = 0, and one of the "
                            "bodies when a run stops unstable: the fluid's velocity (m/s), pressure (mmHg) and "
@@ -792,7 +770,7 @@ std::vector<Param> build_table() {
                              "pre-stressed for a quarter of its ground pressure, the tissue at 3 g/ml, 120 kPa of "
                              "prescribed tension with the LA at 0.4 of it, a 180-mm box). seed: every field's own "
                              "default, the seed's values where the seed gives one; with them the closed aortic valve "
-                             "crumples within 35 ms (docs/fsei.md, sessions 9-14). A field the scenario sets is "
+                             "crumples within 35 ms (docs/notes/fsei-notebook.md). A field the scenario sets is "
                              "never replaced."));
   return t;
 }
@@ -812,29 +790,29 @@ std::string format_number(double v) {
 }  // namespace
 
 const std::vector<SceneDefault>& fsei_calibrated_defaults() {
-  // Run la4's setting (docs/fsei.md, sessions 14-23), field by field; every value is in its
+  // Run la4's setting and what later runs added (docs/notes/fsei-notebook.md), field by field; every value is in its
   // field's range (tests/unit/config_test.cc parses the layer).
   static const std::vector<SceneDefault> layer{
-      // the immersed boundary: closed walls (session 14) that hold their forcing (sessions 12, 16)
-      {"fsei.forcing_kernel", "divergence_free"},
-      {"fsei.forcing_carry_over", "true"},
-      // within 1 h of another body no carry-over (session 37; 2 h until then switched it off along the
-      // closed cusps' coaptation strips, which then passed 18 ml/s back into the LV through the diastole)
-      {"fsei.forcing_carry_over_exclusion_cells", "1"},
-      {"fsei.forcing_carry_over_exclusion_plane", "false"},
-      // the walls' (LV, LA, aorta) markers within 2 h of the valvular plane carry none over (session
-      // 40: at 1 h a stiff LA wound up below the plane at 180 bpm; with the ring on the walls only the
+      // the immersed boundary: closed walls that hold their forcing
+      {"fsei.forcing.kernel", "divergence_free"},
+      {"fsei.forcing.carry_over", "true"},
+      // within 1 h of another body no carry-over (2 h switched it off along the closed cusps' coaptation
+      // strips, which then passed 18 ml/s back into the LV through the diastole)
+      {"fsei.forcing.carry_over_exclusion_cells", "1"},
+      {"fsei.forcing.carry_over_exclusion_plane", "false"},
+      // the walls' (LV, LA, aorta) markers within 2 h of the valvular plane carry none over
+      // (at 1 h a stiff LA wound up below the plane at 180 bpm; with the ring on the walls only the
       // closed aortic cusps keep their seal: 0.39 ml back over the diastole, 1.22 with it on every body)
-      {"fsei.forcing_carry_over_exclusion_plane_wall_cells", "2"},
-      // the fluid's step: CFL 0.4 (session 42: every whole fsi beat recorded since session 25 ran at 0.4,
+      {"fsei.forcing.carry_over_exclusion_plane_wall_cells", "2"},
+      // the fluid's step: CFL 0.4 (every whole fsi beat recorded ran at 0.4,
       // which moved EF by 0.5 % against 0.2 for 41 % less time; at the seed's 0.2 the heart at these
       // defaults ran away late in the ejection at 70 bpm, stopped by the slow-runaway guard at 229 ms)
       {"fluid.cfl", "0.4"},
-      // the carry-over's rate per unit of time held at CFL 0.4's at any smaller step (session 45: at the
+      // the carry-over's rate per unit of time held at CFL 0.4's at any smaller step (at the
       // seed's CFL 0.2 the two stress points that had stopped, 70 bpm x1 and 180 bpm x0.5, complete;
       // at CFL 0.4 and above the share is 1, the runs bitwise those without it)
-      {"fsei.forcing_carry_over_reference_cfl", "0.4"},
-      // the coupling: strong, IQN-ILS, one fluid step per interval, the shells first (sessions 10, 19-21)
+      {"fsei.forcing.carry_over_reference_cfl", "0.4"},
+      // the coupling: strong, IQN-ILS, one fluid step per interval, the shells first
       {"fsei.strong_coupling", "true"},
       {"coupling.relaxation", "iqn_ils"},
       {"coupling.strong_tolerance", "0.01"},
@@ -842,24 +820,24 @@ const std::vector<SceneDefault>& fsei_calibrated_defaults() {
       {"fsei.sync_interval", "fluid_step"},
       {"fsei.coupling_order", "structure_first"},
       {"fsei.first_pass_predictor", "linear"},
-      // the aorta and its afterload (sessions 11, 16)
-      {"fsei.aortic_pretension", "prestress"},
-      {"fsei.aortic_pressure_ramp_ms", "20"},
-      {"fsei.aortic_prestress_fraction", "0.25"},
+      // the aorta and its afterload
+      {"fsei.aorta.pretension", "prestress"},
+      {"fsei.aorta.pressure_ramp_ms", "20"},
+      {"fsei.aorta.prestress_fraction", "0.25"},
       {"tissue.aorta.fung_c_pa", "4312"},
       {"fluid.darcy_permeability", "0.016"},
       {"fluid.box_z_mm", "180"},
-      // the tissue and the valves (sessions 8-15)
+      // the tissue and the valves
       {"tissue.density_g_per_ml", "3"},
       {"geometry.valve_gap_mm", "1"},
       {"electromechanics.bending", "true"},
       {"structure.area_floor", "0.5"},
       {"structure.strain_limit", "0.75"},
       {"structure.aortic_cusp_radius_limit", "1.15"},
-      // the prescribed activation of scene fsi (sessions 21-23)
+      // the prescribed activation of scene fsi
       {"fsei.prescribed_peak_tension_kpa", "120"},
       {"fsei.prescribed_la_tension_fraction", "0.4"},
-      // the EP-driven tension of scene fsei in blood (session 31): the electromechanics scene's
+      // the EP-driven tension of scene fsei in blood: the electromechanics scene's
       // 340 kPa, calibrated against its 0-D afterload, drove the LV to 170 mmHg by 0.16 T
       {"tissue.active_tension_k_kpa", "250", "fsei"},
   };
@@ -939,6 +917,7 @@ std::string parameters_markdown() {
     out << "| `" << p.path << "` | " << (p.unit.empty() ? "-" : std::string(p.unit)) << " | " << def
         << " | " << describe_allowed(p) << " | " << p.doc << " |\n";
   }
+  out << "\n" << removed_fields_markdown();
   return out.str();
 }
 

@@ -8,6 +8,7 @@
 #include "solver/config/fsei_rules.h"
 #include "solver/config/geometry_rules.h"
 #include "solver/config/parameter_table.h"
+#include "solver/config/removed_fields.h"
 #include "solver/core/errors.h"
 #include "solver/core/nearest_names.h"
 
@@ -184,6 +185,8 @@ void walk(const nlohmann::json& node, const std::string& prefix, Scenario& s,
       else if (!it.value().is_null())
         errors.push_back(path + " = " + show(it.value()) + " must be an object with fields: " +
                          known_children(path));
+    } else if (const RemovedField* removed = find_removed_field(path)) {
+      errors.push_back(removed_field_message(*removed));
     } else {
       errors.push_back(unknown_field_message(path, prefix));
     }
@@ -386,6 +389,7 @@ void apply_override(nlohmann::json& document, const std::string& assignment) {
   const std::string text = assignment.substr(eq + 1);
   const Param* p = find_parameter(path);
   if (p == nullptr) {
+    if (const RemovedField* removed = find_removed_field(path)) throw InputError("--set: " + removed_field_message(*removed));
     const auto dot = path.rfind('.');
     const std::string prefix = dot == std::string::npos ? "" : path.substr(0, dot);
     if (prefix.empty() || is_object_prefix(prefix)) throw InputError("--set: " + unknown_field_message(path, prefix));

@@ -210,6 +210,25 @@ struct Electromechanics {
 
 // Scenes "fsei" and "fsi" (solver/scene/fsei_scene.h).
 struct Fsei {
+  // The immersed boundary's direct forcing (ibm::ForcingParameters; MODEL.md eq 3, 8).
+  struct Forcing {
+    std::string kernel;                     // "mls" | "divergence_free": ibm::ForcingParameters::kernel (ours)
+    int iterations;                         // ibm::ForcingParameters::iterations
+    bool carry_over;                        // ibm::ForcingParameters::carry_over (ours)
+    double carry_over_exclusion_cells;      // ibm::ForcingParameters::carry_over_exclusion_cells (ours)
+    bool carry_over_exclusion_plane;        // ibm::ForcingParameters::carry_over_exclusion_rigid (ours)
+    double carry_over_exclusion_plane_cells;  // ibm::ForcingParameters::carry_over_exclusion_rigid_cells (ours)
+    double carry_over_exclusion_plane_wall_cells;  // ibm::ForcingParameters::carry_over_exclusion_rigid_wall_cells (ours)
+    double carry_over_reference_cfl;        // coupling::FluidModuleOptions::carry_over_reference_cfl, 0: off (ours)
+  };
+  // The aorta and how it holds its ground pressure (the seed's pre-tension).
+  struct Aorta {
+    double ground_pressure_mmhg;            // the ground pressure at t = 0 (an outer load on its wall)
+    double pressure_ramp_ms;                // 0: at once; else the outer load ramped over it, blood from rest (ours)
+    std::string pretension;                 // "outer_load" | "prestress": how the wall holds the ground pressure (ours)
+    double prestress_fraction;              // with "prestress": the wall's share of the ground pressure, the rest an outer load (ours)
+    bool outlet_held;                       // the Darcy outlet (kOutflow nodes) held (ours)
+  };
   std::string resolution;               // grid preset: coarse, basic, fine, very_fine, custom
   double sync_step_ms;                  // scheduler synchronisation step
   double end_time_ms;                   // 0: beats x period
@@ -217,26 +236,10 @@ struct Fsei {
   double prescribed_la_tension_fraction;  // fsi: the LA's peak over the LV's (ours)
   double probe_radius_mm;               // pressure probe spheres
   bool strong_coupling;                 // false: loose (the seed's)
-  bool forcing_carry_over;              // ibm::ForcingParameters::carry_over (ours)
-  int forcing_iterations;               // ibm::ForcingParameters::iterations
-  std::string marker_tiling;            // "longest_edge" | "mean_edge" (ours)
-  double stencil_tolerance_cells;       // ibm::ForcingParameters::rebuild_tolerance_cells (ours)
-  double aortic_pressure_mmhg;          // the aorta's ground pressure at t = 0 (an outer load on its wall)
-  double aortic_pressure_ramp_ms;       // 0: at once; else the outer load ramped over it, blood from rest (ours)
+  Forcing forcing;
+  Aorta aorta;
   double field_interval_ms;             // 0: no fields; else a frame of fluid and bodies every this
   double checkpoint_interval_ms;        // the whole coupled state every this (RunControl::checkpoint_directory)
-  bool aortic_outlet_held;              // the aorta's Darcy outlet (kOutflow nodes) held (ours)
-  double forcing_carry_over_factor;     // ibm::ForcingParameters::carry_over_factor (ours)
-  std::string aortic_pretension;        // "outer_load" | "prestress": how the wall holds the ground pressure (ours)
-  double forcing_carry_over_exclusion_cells;  // ibm::ForcingParameters::carry_over_exclusion_cells (ours)
-  std::string forcing_kernel;           // "mls" | "divergence_free": ibm::ForcingParameters::kernel (ours)
-  bool forcing_carry_over_exclusion_plane;  // ibm::ForcingParameters::carry_over_exclusion_rigid (ours)
-  double forcing_carry_over_exclusion_plane_cells;  // ibm::ForcingParameters::carry_over_exclusion_rigid_cells (ours)
-  double forcing_carry_over_exclusion_plane_wall_cells;  // ibm::ForcingParameters::carry_over_exclusion_rigid_wall_cells (ours)
-  bool forcing_row_sum_scaling;         // ibm::ForcingParameters::row_sum_scaling (ours)
-  double forcing_carry_over_increment_share;  // ibm::ForcingParameters::carry_over_increment_share (ours)
-  double forcing_carry_over_reference_cfl;  // coupling::FluidModuleOptions::carry_over_reference_cfl, 0: off (ours)
-  double aortic_prestress_fraction;     // with "prestress": the wall's share of the ground pressure, the rest an outer load (ours)
   std::string slab_split;               // "balanced" | "uniform": grid::Slabs' z split over the ranks (ours)
   std::string sync_interval;            // "fixed" | "fluid_step": coupling::SchedulerOptions::interval_stage (ours)
   int fluid_steps_per_interval;         // with "fluid_step": coupling::SchedulerOptions::interval_stage_steps (ours)

@@ -55,7 +55,7 @@ void validate(const ForcingParameters& p) {
 DirectForcing::DirectForcing(const grid::Slabs& slabs, const Markers& markers, ForcingParameters parameters)
     : slabs_(slabs), markers_(markers), par_((validate(parameters), parameters)), transfer_(slabs, markers, parameters.kernel) {
   transfer_.set_rebuild_tolerance(par_.rebuild_tolerance_cells * markers.h());
-  if (par_.iterations > 1 || par_.carry_over || par_.row_sum_scaling) {
+  if (par_.iterations > 1 || par_.carry_over) {
     work_u_ = std::make_unique<grid::XFaceField>(slabs);
     work_v_ = std::make_unique<grid::YFaceField>(slabs);
     work_w_ = std::make_unique<grid::ZFaceField>(slabs);
@@ -210,20 +210,6 @@ void DirectForcing::import_state(const StateArchive& archive, const std::string&
 
 SlipStats DirectForcing::slip(const ConstVelocityView& u) const { return slip_of(transfer_.interpolate(u)); }
 
-void DirectForcing::update_row_sums() {
-  // A 1 = I S 1: a unit force density at every active marker (spread skips the inactive ones),
-  // spread onto zeroed work fields, halos exchanged, interpolated back.
-  increment_.assign(markers_.markers().size(), Vec3::Ones());
-  work_u_->fill(0);
-  work_v_->fill(0);
-  work_w_->fill(0);
-  transfer_.spread(increment_, VelocityView{*work_u_, *work_v_, *work_w_});
-  grid::exchange_halos(*work_u_, slabs_);
-  grid::exchange_halos(*work_v_, slabs_);
-  grid::exchange_halos(*work_w_, slabs_);
-  transfer_.interpolate(ConstVelocityView{*work_u_, *work_v_, *work_w_}, row_sum_);
-}
-
 const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_hat, VelocityView f,
                                           const Vec3& uniform_force, double increment_share_factor) {
   if (!(increment_share_factor > 0 && increment_share_factor <= 1)) {
@@ -233,7 +219,6 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   }
   const MarkerArrays& m = markers_.markers();
   const std::size_t n = m.size();
-  if (par_.row_sum_scaling) update_row_sums();  // before increment_ is reset (it uses it)
   force_.assign(n, Vec3::Zero());
   increment_.assign(n, Vec3::Zero());
   report_ = ForcingReport{};
@@ -267,8 +252,6 @@ const ForcingReport& DirectForcing::apply(double dt, const ConstVelocityView& u_
   for (int pass = 0; pass < par_.iterations; ++pass) {
     for (std::size_t b = 0; b < n; ++b)
       increment_[b] = markers_.active(b) ? Vec3((m.velocity[b] - U[b]) / dt) : Vec3::Zero();
-    if (par_.row_sum_scaling)  // per component, r_b floored at 1/4 (inactive markers: 0 anyway)
-      for (std::size_t b = 0; b < n; ++b) increment_[b] = increment_[b].cwiseQuotient(row_sum_[b].cwiseMax(0.25));
     for (std::size_t b = 0; b < n; ++b) force_[b] += increment_[b];
     transfer_.spread(increment_, f);
     ++report_.iterations;

@@ -66,16 +66,6 @@ struct ForcingParameters {
   // next to the plane; with the ring on every body the closed aortic valve passed 1.22 ml back
   // against 0.39 ml with it on the walls only (measured at `coarse`, 70 bpm).
   double carry_over_exclusion_rigid_wall_cells = 0.0;
-  // Scale each pass's correction per marker and component by 1/max(r_b, 1/4), r_b the row sum of
-  // A = I S, the interpolation of the spreading of a unit force at every active marker (ours: a
-  // Jacobi-like preconditioning of the passes, Richardson's iteration on A F = (V − I û)/Δt). A
-  // pass multiplies a mode of A with eigenvalue λ by 1 − λ; the MLS rows sum to ≈ 0.5 on a lone
-  // tiling (measured: tests/ibm/forcing_test.cc) and to ≈ 1 where two tilings share a support,
-  // so unscaled the smooth slip falls by about half per pass on a lone body; scaled, its rows sum
-  // to 1 wherever they are. The floor 1/4 bounds the gain (a marker whose support holds little
-  // else). Costs one spreading and one interpolation per step (the row sums follow the markers).
-  // Tested: tests/ibm/forcing_test.cc (RowSumScaling.*).
-  bool row_sum_scaling = false;
   // Stencils are rebuilt only for bodies with a marker moved more than this × h since their
   // last build (ours; Transfer::set_rebuild_tolerance), in [0, 0.5]; 0: after any move.
   double rebuild_tolerance_cells = 0;
@@ -136,9 +126,6 @@ class DirectForcing {
   // F_b of the last apply() (per marker, force density; 0 for inactive markers).
   const std::vector<Vec3>& force_density() const { return force_; }
   const ForcingReport& last_report() const { return report_; }
-  // With row_sum_scaling: the row sums r_b of the last apply() (per marker and component; 0 for
-  // inactive markers); empty without the scaling or before the first step.
-  const std::vector<Vec3>& row_sums() const { return row_sum_; }
   // The carried force F^{n−1} (carry_over): state that the next step starts from, empty before
   // the first step. A strong coupling's repeated interval and a checkpoint save and restore it
   // with the fluid (else a restored run would not repeat bitwise). set_carried_force takes an
@@ -155,12 +142,11 @@ class DirectForcing {
  private:
   SlipStats slip_of(const std::vector<Vec3>& interpolated) const;
   void update_carry_mask();  // carries_ from the markers' positions (carry_over_exclusion_cells)
-  void update_row_sums();    // row_sum_ from the markers' stencils (row_sum_scaling). Collective.
   const grid::Slabs& slabs_;
   const Markers& markers_;
   ForcingParameters par_;
   Transfer transfer_;
-  std::vector<Vec3> force_, increment_, previous_, interpolated_, row_sum_;
+  std::vector<Vec3> force_, increment_, previous_, interpolated_;
   std::vector<Vec3> start_;  // the force a step started from (carry_over_increment_share < 1)
   ForcingReport report_;
   std::vector<char> carries_;  // per marker: 1 = its force is carried over (empty: all)
@@ -168,8 +154,8 @@ class DirectForcing {
   // update_carry_mask's buffers (cells' starts and bodies, the markers' cells and sorted order)
   std::vector<std::uint32_t> mask_start_, mask_order_, mask_cell_of_, mask_fill_;
   std::vector<std::uint64_t> mask_bodies_;
-  // Work velocity û + Δt f of the multi-direct passes and the row sums (allocated when
-  // iterations > 1, with the carry-over or with the row-sum scaling).
+  // Work velocity û + Δt f of the multi-direct passes (allocated when iterations > 1 or with
+  // the carry-over).
   std::unique_ptr<grid::XFaceField> work_u_;
   std::unique_ptr<grid::YFaceField> work_v_;
   std::unique_ptr<grid::ZFaceField> work_w_;

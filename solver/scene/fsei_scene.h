@@ -1,7 +1,7 @@
 #pragma once
 // Scenes "fsei" and "fsi" (issue #9, docs/fsei.md): the procedural left heart immersed in the
 // blood of the fluid box, every body forced by direct forcing (the seed's MLS, or the divergence-
-// free kernel of the calibrated defaults: fsei.forcing_kernel), the deformable ones moved by
+// free kernel of the calibrated defaults: fsei.forcing.kernel), the deformable ones moved by
 // their thin shells, the LV and LA contracting (fsei: tension from the EP of the electro scene;
 // fsi: a prescribed activation waveform instead of EP). One synchronisation interval of the
 // multirate scheduler reads like the seed's Fig. 6:
@@ -19,9 +19,9 @@
 // Darcy region at the end of the descending aorta (fluid.darcy_permeability). The run starts at
 // the LV stimulus (beginning of systole) with the valves closed and the fluid at rest; EP is
 // pre-run alone from the LA stimulus (ours). The aorta is "pretensioned" to the ground pressure
-// fsei.aortic_pressure_mmhg: the blood in its lumen starts at that pressure and an outer
+// fsei.aorta.ground_pressure_mmhg: the blood in its lumen starts at that pressure and an outer
 // pressure as large acts on its wall outside the Darcy region (ours: it stays on; with
-// fsei.aortic_pressure_ramp_ms > 0 the outer load is ramped from blood at rest instead).
+// fsei.aorta.pressure_ramp_ms > 0 the outer load is ramped from blood at rest instead).
 // Chamber pressures are spatial means over probe spheres inside the LV, LA and aortic root,
 // relative to a probe in the outer fluid (ours: the box's pressure level is arbitrary).
 // Checkpoints (fsei/checkpoint.h): with a RunControl::checkpoint_directory(), the whole coupled

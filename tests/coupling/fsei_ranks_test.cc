@@ -34,7 +34,7 @@ class Quiet final : public scene::RunControl {
 
 test::RunValues run_case() {
   const nlohmann::json doc = {{"scene", "fsi"},
-                              {"fsei", {{"end_time_ms", 1.0}, {"aortic_pressure_ramp_ms", 0.0}}},
+                              {"fsei", {{"end_time_ms", 1.0}, {"aorta", {{"pressure_ramp_ms", 0.0}}}}},
                               {"outputs", {{"time_series_interval_ms", 0.2}}}};
   const config::Scenario s = config::parse_scenario(doc);
   Quiet control;

@@ -11,7 +11,7 @@
 // The resumed run's fields: "resume" writes into the straight run's OUTDIR, where the frames
 // continue (3 frames: 0, 0.5, 1 ms; the one at 1 ms is written again); "resume-fresh" empties
 // OUTDIR first: the frames before the checkpoint are left out of the xmf, with a note.
-// SCENE fsi_carry_over: fsi with the tight setting's numerics: fsei.forcing_carry_over (the
+// SCENE fsi_carry_over: fsi with the tight setting's numerics: fsei.forcing.carry_over (the
 // carried force is checkpointed), strong IQN-ILS coupling (its secant columns are) and
 // fsei.sync_interval = fluid_step (the intervals follow the fluid's restored velocities).
 // SCENE fsi_structure_first / fsei_structure_first: fsi_carry_over's numerics on fsi / fsei with
@@ -59,7 +59,7 @@ RunResult run_case(const std::string& scene, const std::filesystem::path& out, c
   nlohmann::json doc = {
       {"scene", base},
       {"fsei",
-       {{"end_time_ms", 1.0}, {"checkpoint_interval_ms", 0.6}, {"field_interval_ms", 0.5}, {"forcing_carry_over", carry_over}}},
+       {{"end_time_ms", 1.0}, {"checkpoint_interval_ms", 0.6}, {"field_interval_ms", 0.5}, {"forcing", {{"carry_over", carry_over}}}}},
       {"outputs", {{"time_series_interval_ms", 0.2}}}};
   doc["fsei"]["defaults"] = "seed";  // each case names its numerics on the table's defaults
   if (carry_over) {

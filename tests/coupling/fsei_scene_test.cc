@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "solver/config/scenario.h"
+#include "solver/config/removed_fields.h"
 #include "solver/core/errors.h"
 #include "solver/geometry/diagnostics.h"
 #include "solver/geometry/left_heart.h"
@@ -395,9 +396,9 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   EXPECT_NE(sync.find("fsei.sync_step_ms = 0.075"), std::string::npos) << sync;
   EXPECT_NE(sync.find("whole multiple of electro.time_step_ms"), std::string::npos) << sync;
   // The pre-stress's share without the pre-stress.
-  const std::string share = seed_parse_error_of("fsi", {{"fsei", {{"aortic_prestress_fraction", 0.25}}}});
-  EXPECT_NE(share.find("fsei.aortic_prestress_fraction = 0.25"), std::string::npos) << share;
-  EXPECT_NE(share.find("needs fsei.aortic_pretension = \"prestress\""), std::string::npos) << share;
+  const std::string share = seed_parse_error_of("fsi", {{"fsei", {{"aorta", {{"prestress_fraction", 0.25}}}}}});
+  EXPECT_NE(share.find("fsei.aorta.prestress_fraction = 0.25"), std::string::npos) << share;
+  EXPECT_NE(share.find("needs fsei.aorta.pretension = \"prestress\""), std::string::npos) << share;
   // The mitral limiter's window without the limiter; a window outside (0, 1].
   const std::string window =
       seed_parse_error_of("fsi", {{"structure", {{"mitral_limiter", false}, {"mitral_limiter_end_phase", 0.4}}}});
@@ -427,11 +428,11 @@ TEST(FseiScene, BadInputIsRefusedWithTheFieldAndWhatIsAllowed) {
   EXPECT_NE(predictor.find("fsei.first_pass_predictor"), std::string::npos) << predictor;
   EXPECT_NE(predictor.find("linear"), std::string::npos) << predictor;
   // The plane's carry-over exclusion beyond its range [0, 4] cells.
-  const std::string ring = parse_error_of("fsi", {{"fsei", {{"forcing_carry_over_exclusion_plane_cells", 5}}}});
-  EXPECT_NE(ring.find("fsei.forcing_carry_over_exclusion_plane_cells"), std::string::npos) << ring;
+  const std::string ring = parse_error_of("fsi", {{"fsei", {{"forcing", {{"carry_over_exclusion_plane_cells", 5}}}}}});
+  EXPECT_NE(ring.find("fsei.forcing.carry_over_exclusion_plane_cells"), std::string::npos) << ring;
   const std::string wall_ring =
-      parse_error_of("fsi", {{"fsei", {{"forcing_carry_over_exclusion_plane_wall_cells", -0.5}}}});
-  EXPECT_NE(wall_ring.find("fsei.forcing_carry_over_exclusion_plane_wall_cells"), std::string::npos) << wall_ring;
+      parse_error_of("fsi", {{"fsei", {{"forcing", {{"carry_over_exclusion_plane_wall_cells", -0.5}}}}}});
+  EXPECT_NE(wall_ring.find("fsei.forcing.carry_over_exclusion_plane_wall_cells"), std::string::npos) << wall_ring;
   EXPECT_NE(wall_ring.find("-0.5"), std::string::npos) << wall_ring;
 }
 
@@ -546,7 +547,7 @@ TEST(FseiFields, WssPhaseAverageFileHoldsEveryBodysBins) {
 // the LV pressure rises above the LA and the aortic root while the valves stay closed. Without
 // the aorta's ground pressure: the closed aortic valve does not carry it yet (docs/fsei.md).
 TEST(FseiScene, CoarseStartBuildsLvPressureBehindClosedValves) {
-  const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aortic_pressure_mmhg", 0.0}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
+  const config::Scenario s = seed_scenario("fsi", {{"fsei", {{"end_time_ms", 3.0}, {"aorta", {{"ground_pressure_mmhg", 0.0}}}}}, {"outputs", {{"time_series_interval_ms", 0.5}}}});
   Quiet control;
   const RunResult r = run_fsei(s, control);
   for (const auto& [key, value] : r.metrics) EXPECT_TRUE(std::isfinite(value)) << key;
@@ -709,7 +710,7 @@ TEST(FseiScene, TheEpDrivenWallsContractTheLvBehindClosedValves) {
   EXPECT_LT(std::abs(w.leak_ml_s_per_mmhg), 1.0);
 }
 
-// The divergence-free kernel in the heart (fsei.forcing_kernel, ours; docs/fsei.md session 14):
+// The divergence-free kernel in the heart (fsei.forcing.kernel, ours; docs/notes/fsei-notebook.md):
 // the first 5 ms of the heavy pre-stressed setting, while the aorta's outer load ramps up. With
 // the seed's MLS forcing the blood leaves the aorta through its wall at ≈ 11 ml/s per mmHg of root
 // pressure by 5 ms (82 ml/s at 7.4 mmHg measured); with the kernel, the carry-over forcing, its
@@ -720,12 +721,10 @@ TEST(FseiScene, TheEpDrivenWallsContractTheLvBehindClosedValves) {
 TEST(FseiScene, TheDivergenceFreeKernelTightensTheAortasWall) {
   std::vector<double> slip[2], root[2];
   for (int k = 0; k < 2; ++k) {
-    nlohmann::json fsei{{"end_time_ms", 5.0}, {"aortic_pretension", "prestress"}, {"aortic_pressure_ramp_ms", 20.0}};
+    nlohmann::json fsei{{"end_time_ms", 5.0}, {"aorta", {{"pretension", "prestress"}, {"pressure_ramp_ms", 20.0}}}};
     nlohmann::json coupling = nlohmann::json::object();
     if (k == 1) {
-      fsei["forcing_kernel"] = "divergence_free";
-      fsei["forcing_carry_over"] = true;
-      fsei["forcing_carry_over_exclusion_cells"] = 2.0;
+      fsei["forcing"] = {{"kernel", "divergence_free"}, {"carry_over", true}, {"carry_over_exclusion_cells", 2.0}};
       fsei["strong_coupling"] = true;
       coupling = {{"relaxation", "iqn_ils"}, {"strong_tolerance", 1e-3}, {"strong_max_iterations", 12}};
     }
@@ -754,7 +753,7 @@ TEST(FseiScene, TheDivergenceFreeKernelTightensTheAortasWall) {
   }
 }
 
-// The seed's aorta pre-tension (fsei.aortic_pressure_mmhg, 60 mmHg by default): the blood in the
+// The seed's aorta pre-tension (fsei.aorta.ground_pressure_mmhg, 60 mmHg by default): the blood in the
 // aorta starts at the ground pressure and the outer load on the wall holds it, so after the
 // first coupling interval the aortic-root probe reads it (within 15 %) while the LV and the LA,
 // behind the closed valves, stay near the outer fluid's pressure; the note gives the aorta's
@@ -763,7 +762,7 @@ TEST(FseiScene, TheDivergenceFreeKernelTightensTheAortasWall) {
 TEST(FseiScene, AortaStartsAtItsGroundPressure) {
   const config::Scenario s =
       seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}}}, {"outputs", {{"time_series_interval_ms", 0.1}}}});
-  ASSERT_EQ(s.fsei.aortic_pressure_mmhg, 60.0);
+  ASSERT_EQ(s.fsei.aorta.ground_pressure_mmhg, 60.0);
   Quiet control;
   const RunResult r = run_fsei(s, control);
   const double p_ao = r.metrics.at("aortic_root_pressure_max_mmhg");
@@ -783,7 +782,7 @@ TEST(FseiScene, AortaStartsAtItsGroundPressure) {
   EXPECT_TRUE(noted);
 }
 
-// fsei.aortic_pretension = prestress (ours): the aorta's wall, not an outer load, holds the
+// fsei.aorta.pretension = prestress (ours): the aorta's wall, not an outer load, holds the
 // ground pressure. The springs are shortened so that the built aorta is in equilibrium with
 // 60 mmHg inside (structure/prestress.h); the blood starts at it, so after the first interval the
 // root reads it as with the outer load, and the note reports the pre-stress: a mean shortening
@@ -794,11 +793,11 @@ TEST(FseiScene, AortaStartsAtItsGroundPressure) {
 // leaflets', docs/fsei.md session 8); at the default 11.3 Pa no wall holds 60 mmHg within the
 // strain limit, which is an input error naming the body and the limit.
 TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
-  const std::string too_soft = error_of(seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aortic_pretension", "prestress"}}}}));
+  const std::string too_soft = error_of(seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aorta", {{"pretension", "prestress"}}}}}}));
   EXPECT_NE(too_soft.find("body 'aorta'"), std::string::npos) << too_soft;
   EXPECT_NE(too_soft.find("strain limit"), std::string::npos) << too_soft;
   const config::Scenario s =
-      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aortic_pretension", "prestress"}}},
+      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.1}, {"aorta", {{"pretension", "prestress"}}}}},
                        {"tissue", {{"aorta", {{"fung_c_pa", 4312.0}}}}},
                        {"outputs", {{"time_series_interval_ms", 0.1}}}});
   Quiet control;
@@ -819,7 +818,7 @@ TEST(FseiScene, APrestressedAortaHoldsItsGroundPressureByItsWall) {
   EXPECT_TRUE(noted);
 
   const config::Scenario ramped =
-      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.3}, {"aortic_pretension", "prestress"}, {"aortic_pressure_ramp_ms", 20.0}}},
+      seed_scenario("fsi", {{"fsei", {{"end_time_ms", 0.3}, {"aorta", {{"pretension", "prestress"}, {"pressure_ramp_ms", 20.0}}}}},
                        {"tissue", {{"aorta", {{"fung_c_pa", 4312.0}}}}},
                        {"outputs", {{"time_series_interval_ms", 0.1}}}});
   const RunResult q = run_fsei(ramped, control);
@@ -1173,7 +1172,7 @@ TEST(FseiScene, ProgressNamesTheLargestCarriedForceWhenTheForcingCarriesIt) {
     EXPECT_TRUE(tail.find(" mm carrying") != std::string::npos || tail.find(" mm excluded") != std::string::npos) << m;
   }
   nlohmann::json off = doc;
-  off["fsei"]["forcing_carry_over"] = false;
+  off["fsei"]["forcing"]["carry_over"] = false;
   Messages plain;
   (void)run_fsei(scenario("fsi", off), plain);
   ASSERT_EQ(plain.all.size(), 2u);
@@ -1205,20 +1204,66 @@ TEST(FseiScene, ACheckpointFromBeforeAParameterResumesAtItsDefault) {
     if (at != std::string::npos) f.erase(at, f.find('\n', at) + 1 - at);
     return f;
   };
-  const nlohmann::json prestress{{"fsei", {{"aortic_pretension", "prestress"}}}};
+  const nlohmann::json prestress{{"fsei", {{"aorta", {{"pretension", "prestress"}}}}}};
   const std::string current = scenario_fingerprint(seed_scenario("fsi", prestress));
-  const std::string older = without(current, "fsei.aortic_prestress_fraction");
+  const std::string older = without(current, "fsei.aorta.prestress_fraction");
   EXPECT_NO_THROW(check_fingerprint("old", older, current));
   const std::string half = scenario_fingerprint(
-      seed_scenario("fsi", {{"fsei", {{"aortic_pretension", "prestress"}, {"aortic_prestress_fraction", 0.5}}}}));
+      seed_scenario("fsi", {{"fsei", {{"aorta", {{"pretension", "prestress"}, {"prestress_fraction", 0.5}}}}}}));
   try {
     check_fingerprint("old", older, half);
     ADD_FAILURE() << "a checkpoint from before the parameter resumed with another value of it";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("fsei.aortic_prestress_fraction=0.5"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fsei.aorta.prestress_fraction=0.5"), std::string::npos) << e.what();
   }
   // a parameter the checkpoint has keeps being compared, default or not
   EXPECT_THROW(check_fingerprint("old", half, current), InputError);
+}
+
+// A checkpoint written before the knobs were pruned (solver/config/removed_fields.cc): its
+// fingerprint names the moved fields by their old paths, in the old order, and has lines for the
+// removed ones. It resumes when every moved field has this scenario's value and every removed one
+// its only value; a removed one at another value, or a moved one that differs, is refused by name.
+TEST(FseiScene, ACheckpointFromBeforeTheRenameResumes) {
+  const std::string current = scenario_fingerprint(seed_scenario("fsi", nlohmann::json::object()));
+  std::string older;  // the old paths, the moved lines first, then the removed ones at their only value
+  std::string rest;
+  std::istringstream in(current);
+  for (std::string l; std::getline(in, l);) {
+    const std::string path = l.substr(0, l.find('='));
+    bool moved = false;
+    for (const config::RemovedField& f : config::removed_fields())
+      if (f.moved_to == path) {
+        older += std::string(f.path) + l.substr(l.find('=')) + "\n";
+        moved = true;
+      }
+    if (!moved) rest += l + "\n";
+  }
+  ASSERT_NE(older.find("fsei.forcing_kernel=mls\n"), std::string::npos) << older;
+  ASSERT_NE(older.find("fsei.aortic_pressure_mmhg=60\n"), std::string::npos) << older;
+  older = rest + older + "fsei.forcing_row_sum_scaling=false\nfsei.marker_tiling=mean_edge\n"
+                         "fsei.forcing_carry_over_factor=1\nfsei.stencil_tolerance_cells=0\n"
+                         "fsei.forcing_carry_over_increment_share=1\n";
+  EXPECT_NO_THROW(check_fingerprint("old", older, current));
+  // a removed knob at another value than the one every run used
+  std::string scaled = older;
+  scaled.replace(scaled.find("fsei.forcing_row_sum_scaling=false"), 34, "fsei.forcing_row_sum_scaling=true");
+  try {
+    check_fingerprint("old", scaled, current);
+    ADD_FAILURE() << "a checkpoint with a removed knob at another value resumed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fsei.forcing_row_sum_scaling=true"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("was removed"), std::string::npos) << e.what();
+  }
+  // a moved field that differs is named by its new path
+  std::string other = older;
+  other.replace(other.find("fsei.forcing_kernel=mls"), 23, "fsei.forcing_kernel=divergence_free");
+  try {
+    check_fingerprint("old", other, current);
+    ADD_FAILURE() << "a checkpoint with another kernel resumed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fsei.forcing.kernel=divergence_free"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

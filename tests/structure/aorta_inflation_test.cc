@@ -70,7 +70,7 @@ TEST(AortaInflation, BadInputNamesTheValue) {
   }
   EXPECT_THROW(scene::AortaInflation(aorta_scenario(), 60, 1.0, 0.0), InputError);
   config::Scenario free_outlet = aorta_scenario();
-  free_outlet.fsei.aortic_outlet_held = false;
+  free_outlet.fsei.aorta.outlet_held = false;
   EXPECT_THROW(scene::AortaInflation(free_outlet, 60, 1.0, 0.5), InputError);
 }
 

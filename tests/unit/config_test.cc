@@ -181,9 +181,9 @@ TEST(Config, FsiAndFseiTakeTheCalibratedDefaultsUnlessTheScenarioSetsTheField) {
   }
   // A field the scenario sets wins over the layer, at its table default too.
   const Scenario own = parse_scenario({{"scene", "fsi"}, {"tissue", {{"density_g_per_ml", 1.05}}},
-                                       {"fsei", {{"forcing_kernel", "mls"}}}});
+                                       {"fsei", {{"forcing", {{"kernel", "mls"}}}}}});
   EXPECT_EQ(own.tissue.density_g_per_ml, 1.05);
-  EXPECT_EQ(own.fsei.forcing_kernel, "mls");
+  EXPECT_EQ(own.fsei.forcing.kernel, "mls");
   EXPECT_EQ(own.fsei.prescribed_peak_tension_kpa, 120.0);  // the rest stays calibrated
   // fsei.defaults = seed and the other scenes: the table's defaults.
   nlohmann::json seed = to_json(parse_scenario({{"scene", "fsi"}, {"fsei", {{"defaults", "seed"}}}}));
@@ -282,7 +282,7 @@ TEST(Config, EveryExampleScenarioParses) {
   std::ifstream in(std::string(SYSTOLE_SOURCE_DIR) + "/examples/fsi_tight_beat.json");
   const Scenario s = parse_scenario(nlohmann::json::parse(in));
   EXPECT_EQ(s.scene, "fsi");
-  EXPECT_EQ(s.fsei.forcing_kernel, "divergence_free");
+  EXPECT_EQ(s.fsei.forcing.kernel, "divergence_free");
   EXPECT_EQ(s.fluid.nz, 83);
 }
 

@@ -9,6 +9,8 @@
 #include "proto/bridge/json_fields.h"
 #include "proto/bridge/scenario_bridge.h"
 #include "solver/config/fsei_rules.h"
+#include "solver/config/parameter_table.h"
+#include "solver/config/removed_fields.h"
 #include "solver/config/scenario.h"
 #include "solver/core/errors.h"
 #include "solver/core/nearest_names.h"
@@ -67,9 +69,9 @@ struct RuleCase {
 
 TEST(FseiRules, EachRuleRefusesTheBadScenarioNamingItsFieldsAndAcceptsTheGoodOne) {
   const std::vector<RuleCase> cases{
-      {"pre-stress share without the pre-stress", seed("fsi", {{"aortic_prestress_fraction", 0.25}}),
-       seed("fsi", {{"aortic_prestress_fraction", 0.25}, {"aortic_pretension", "prestress"}}),
-       {"fsei.aortic_prestress_fraction = 0.25", "fsei.aortic_pretension = \"prestress\"", "got \"outer_load\""}},
+      {"pre-stress share without the pre-stress", seed("fsi", {{"aorta", {{"prestress_fraction", 0.25}}}}),
+       seed("fsi", {{"aorta", {{"prestress_fraction", 0.25}, {"pretension", "prestress"}}}}),
+       {"fsei.aorta.prestress_fraction = 0.25", "fsei.aorta.pretension = \"prestress\"", "got \"outer_load\""}},
       {"shells first with loose coupling", seed("fsi", {{"coupling_order", "structure_first"}}),
        seed("fsi", {{"coupling_order", "structure_first"}, {"strong_coupling", true}}),
        {"fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true"}},
@@ -117,11 +119,11 @@ TEST(FseiRules, TheIssuesExampleNamesBothFields) {
 
 TEST(FseiRules, EveryViolatedRuleIsReportedAtOnce) {
   const std::string all = error_of(seed("fsei",
-                                        {{"aortic_prestress_fraction", 0.5}, {"coupling_order", "structure_first"},
+                                        {{"aorta", {{"prestress_fraction", 0.5}}}, {"coupling_order", "structure_first"},
                                          {"fluid_steps_per_interval", 3}, {"sync_step_ms", 0.075}, {"probe_radius_mm", 0.5}},
                                         {{"electro", {{"mesh", "sheet"}}}}));
   EXPECT_TRUE(contains(all, "invalid scenario (6 problems)")) << all;
-  for (const char* field : {"fsei.aortic_prestress_fraction", "fsei.coupling_order", "fsei.fluid_steps_per_interval",
+  for (const char* field : {"fsei.aorta.prestress_fraction", "fsei.coupling_order", "fsei.fluid_steps_per_interval",
                             "fsei.sync_step_ms", "electro.mesh", "fsei.probe_radius_mm"})
     EXPECT_TRUE(contains(all, field)) << field << ": " << all;
 }
@@ -246,6 +248,65 @@ TEST(JsonFields, AScenarioFilesUnknownKeysComeWithItsOtherProblems) {
     EXPECT_TRUE(contains(m, "unknown field 'fsei.strong_couplng'; did you mean 'strong_coupling'?")) << m;
     EXPECT_TRUE(contains(m, "fsei.coupling_order = \"structure_first\" needs fsei.strong_coupling = true")) << m;
   }
+}
+
+// --- removed and moved fields (solver/config/removed_fields.h) --------------------------------
+
+// A scenario naming a removed or moved field is told what happened and why, in config's JSON walk,
+// in --set and in the proto JSON check the REST gateway and scenario files use.
+TEST(RemovedFields, EachIsNamedWithWhatHappenedInParsingSetAndProtoJson) {
+  const std::string e = error_of({{"scene", "fsi"}, {"fsei", {{"forcing_row_sum_scaling", true}, {"forcing_kernel", "mls"}}}});
+  EXPECT_TRUE(contains(e, "invalid scenario (2 problems)")) << e;
+  EXPECT_TRUE(contains(e, "fsei.forcing_row_sum_scaling was removed: refuted: ")) << e;
+  EXPECT_TRUE(contains(e, "0.186 s against 0.229 s")) << e;
+  EXPECT_TRUE(contains(e, "; remove it from the scenario")) << e;
+  EXPECT_TRUE(contains(e, "fsei.forcing_kernel moved to fsei.forcing.kernel (")) << e;
+  EXPECT_TRUE(contains(e, "rename it in the scenario")) << e;
+  json doc = json::object();
+  try {
+    config::apply_override(doc, "fsei.marker_tiling=mean_edge");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& x) {
+    EXPECT_TRUE(contains(x.what(), "--set: fsei.marker_tiling was removed: ")) << x.what();
+  }
+  try {
+    config::apply_override(doc, "fsei.aortic_pressure_mmhg=70");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& x) {
+    EXPECT_TRUE(contains(x.what(), "fsei.aortic_pressure_mmhg moved to fsei.aorta.ground_pressure_mmhg")) << x.what();
+  }
+  // every entry: a moved field's new path is a parameter, a removed one is not, and each has a reason
+  for (const config::RemovedField& f : config::removed_fields()) {
+    EXPECT_EQ(config::find_parameter(f.path), nullptr) << f.path;
+    EXPECT_FALSE(f.why.empty()) << f.path;
+    if (!f.moved_to.empty()) EXPECT_NE(config::find_parameter(f.moved_to), nullptr) << f.moved_to;
+    else EXPECT_FALSE(f.only_value.empty()) << f.path;
+  }
+  // proto3 JSON: inside a request and in a scenario file, either spelling
+  v1::SubmitJobRequest request;
+  const bridge::JsonParse parse = bridge::parse_json_message(
+      R"({"scenario": {"scene": "fsi", "fsei": {"forcingCarryOverFactor": 0.9, "aortic_pretension": "prestress"}}})",
+      request);
+  ASSERT_EQ(parse.problems.size(), 2u) << ::testing::PrintToString(parse.problems);
+  EXPECT_TRUE(contains(parse.problems[0], "scenario.fsei.forcingCarryOverFactor: fsei.forcing_carry_over_factor was removed: "))
+      << parse.problems[0];
+  EXPECT_TRUE(contains(parse.problems[1], "scenario.fsei.aortic_pretension: fsei.aortic_pretension moved to fsei.aorta.pretension"))
+      << parse.problems[1];
+  try {
+    (void)bridge::scenario_proto_from_json_text(R"({"scene": "fsi", "fsei": {"stencil_tolerance_cells": 0}})");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& x) {
+    EXPECT_TRUE(contains(x.what(), "fsei.stencil_tolerance_cells was removed: unused")) << x.what();
+  }
+  // the new paths parse, through both
+  EXPECT_EQ(error_of({{"scene", "fsi"}, {"fsei", {{"forcing", {{"kernel", "mls"}}}, {"aorta", {{"pretension", "prestress"}}}}}}), "");
+  const auto ok = bridge::scenario_proto_from_json_text(R"({"scene": "fsi", "fsei": {"forcing": {"kernel": "mls"}}})");
+  EXPECT_EQ(ok.fsei().forcing().kernel(), "mls");
+}
+
+// message Fsei keeps at most 20 fields (issue 59, item 5): the forcing and the aorta are groups.
+TEST(RemovedFields, TheFseiMessageHasAtMostTwentyFields) {
+  EXPECT_LE(v1::Fsei::descriptor()->field_count(), 20);
 }
 
 }  // namespace

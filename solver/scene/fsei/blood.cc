@@ -109,10 +109,10 @@ fluid::FluidParameters fluid_parameters(const config::Scenario& s, const geometr
 double start_aorta_at_ground_pressure(const config::Scenario& s, const geometry::LeftHeart& heart,
                                       const grid::Grid& g, fluid::FluidSolver& fluid) {
   const config::Fsei& fs = s.fsei;
-  if (!(fs.aortic_pressure_mmhg > 0 && fs.aortic_pressure_ramp_ms == 0)) return 0;
+  if (!(fs.aorta.ground_pressure_mmhg > 0 && fs.aorta.pressure_ramp_ms == 0)) return 0;
   const geometry::TriMesh& aorta = heart.body(geometry::kAortaBody);
   const AortaInterior interior(aorta, heart.plane, 0.75 * s.geometry.aortic_root_diameter_mm);
-  const double p0 = fs.aortic_pressure_mmhg * units::kPaPerMmHg /
+  const double p0 = fs.aorta.ground_pressure_mmhg * units::kPaPerMmHg /
                     (s.fluid.density_kg_per_m3 * units::kSeedVelocity_m_s * units::kSeedVelocity_m_s);
   long inside_cells = 0;
   fluid.set_pressure([&](double x, double y, double z) {
@@ -125,19 +125,15 @@ double start_aorta_at_ground_pressure(const config::Scenario& s, const geometry:
   return static_cast<double>(all) * g.dx() * g.dy() * g.dz() * kDmMm * kDmMm * kDmMm * kMlPerMm3;
 }
 
-ibm::ForcingParameters forcing_parameters(const config::Fsei& fs) {
-  ibm::ForcingParameters f;
-  f.carry_over = fs.forcing_carry_over;
-  f.carry_over_factor = fs.forcing_carry_over_factor;
-  f.carry_over_exclusion_cells = fs.forcing_carry_over_exclusion_cells;
-  f.carry_over_exclusion_rigid = fs.forcing_carry_over_exclusion_plane;  // the plane: the one rigid body
-  f.carry_over_exclusion_rigid_cells = fs.forcing_carry_over_exclusion_plane_cells;
-  f.carry_over_exclusion_rigid_wall_cells = fs.forcing_carry_over_exclusion_plane_wall_cells;
-  f.row_sum_scaling = fs.forcing_row_sum_scaling;
-  f.carry_over_increment_share = fs.forcing_carry_over_increment_share;
-  f.iterations = fs.forcing_iterations;
-  f.rebuild_tolerance_cells = fs.stencil_tolerance_cells;
-  f.kernel = fs.forcing_kernel == "divergence_free" ? ibm::TransferKernel::divergence_free : ibm::TransferKernel::mls;
+ibm::ForcingParameters forcing_parameters(const config::Fsei::Forcing& forcing) {
+  ibm::ForcingParameters f;  // carry_over_factor, carry_over_increment_share, rebuild_tolerance_cells: their defaults
+  f.kernel = forcing.kernel == "divergence_free" ? ibm::TransferKernel::divergence_free : ibm::TransferKernel::mls;
+  f.iterations = forcing.iterations;
+  f.carry_over = forcing.carry_over;
+  f.carry_over_exclusion_cells = forcing.carry_over_exclusion_cells;
+  f.carry_over_exclusion_rigid = forcing.carry_over_exclusion_plane;  // the plane: the one rigid body
+  f.carry_over_exclusion_rigid_cells = forcing.carry_over_exclusion_plane_cells;
+  f.carry_over_exclusion_rigid_wall_cells = forcing.carry_over_exclusion_plane_wall_cells;
   return f;
 }
 

@@ -26,14 +26,15 @@ grid::Slabs fluid_slabs(const config::Scenario& s, const grid::Grid& g, const st
 // the Darcy region around the descending aorta's outflow cylinder.
 fluid::FluidParameters fluid_parameters(const config::Scenario& s, const geometry::LeftHeart& heart);
 
-// The blood inside the aorta at fsei.aortic_pressure_mmhg above the rest of the box at t = 0
+// The blood inside the aorta at fsei.aorta.ground_pressure_mmhg above the rest of the box at t = 0
 // (the seed's pre-tension, when it is not ramped; ours in detail: an AortaInterior test per
 // cell). Collective. Returns the volume started at it in ml (0 when none).
 double start_aorta_at_ground_pressure(const config::Scenario& s, const geometry::LeftHeart& heart,
                                       const grid::Grid& g, fluid::FluidSolver& fluid);
 
-// The direct forcing's parameters from fsei.forcing_* (kernel, passes, carry-over and its
-// exclusion rings; the valvular plane is the one rigid body).
-ibm::ForcingParameters forcing_parameters(const config::Fsei& fs);
+// The direct forcing's parameters from fsei.forcing (kernel, passes, carry-over and its
+// exclusion rings; the valvular plane is the one rigid body). The carry-over's increment share is
+// set per step from fsei.forcing.carry_over_reference_cfl (coupling::FluidModuleOptions).
+ibm::ForcingParameters forcing_parameters(const config::Fsei::Forcing& forcing);
 
 }  // namespace systole::scene::fsei

@@ -29,11 +29,11 @@ std::size_t shell_node_total(const structure::BodyGroup& group);
 // radial limit and the held Darcy outlet (ours), in one group with contact between them.
 structure::BodyGroup build_shells(const config::Scenario& s, const geometry::LeftHeart& heart);
 
-// The aorta's pre-tension (fsei.aortic_pretension): the ground pressure fsei.aortic_pressure_mmhg
+// The aorta's pre-tension (fsei.aorta.pretension): the ground pressure fsei.aorta.ground_pressure_mmhg
 // carried by a pre-stress of the wall (its springs' rest lengths shortened so that the built
 // shape is in equilibrium with the wall's share inside, structure/prestress.h) and/or by an
 // outer pressure on the wall outside the Darcy region; either ramped over
-// fsei.aortic_pressure_ramp_ms or there from t = 0.
+// fsei.aorta.pressure_ramp_ms or there from t = 0.
 class AortaPretension {
  public:
   // Sets the prestressed rest lengths on the group's aorta when there is no ramp.

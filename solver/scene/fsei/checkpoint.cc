@@ -5,7 +5,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "solver/config/parameter_table.h"
+#include "solver/config/removed_fields.h"
 #include "solver/core/errors.h"
 #include "solver/scene/h5_dataset.h"
 
@@ -215,6 +218,10 @@ StateArchive read_state_file(const fs::path& file, std::string& fingerprint) {
 void check_fingerprint(const fs::path& checkpoint, const std::string& stored, const std::string& current) {
   if (stored == current) return;
   auto path_of = [](const std::string& line) { return line.substr(0, line.find('=')); };
+  auto refuse = [&](const std::string& there, const std::string& here, const std::string& why) {
+    throw InputError(std::string("the checkpoint in ") + checkpoint.string() + " belongs to another scenario: it has " + there +
+                     ", this scenario " + here + why + " (remove the checkpoint directory to start over)");
+  };
   // A checkpoint written before a parameter was excluded still carries its line: skip it.
   auto lines = [&](const std::string& s) {
     std::vector<std::string> out;
@@ -223,7 +230,25 @@ void check_fingerprint(const fs::path& checkpoint, const std::string& stored, co
       if (!excluded(path_of(l))) out.push_back(l);
     return out;
   };
-  const auto a = lines(stored);
+  // A checkpoint written before a field moved or was removed (config/removed_fields.h): a moved
+  // field's line under its new path; a removed field's line dropped when it has the one value
+  // every run used (its behaviour is the code's now), refused otherwise.
+  std::vector<std::string> a;
+  {
+    std::istringstream in(stored);
+    for (std::string l; std::getline(in, l);) {
+      const std::string path = path_of(l);
+      const config::RemovedField* gone = config::find_removed_field(path);
+      if (gone == nullptr) {
+        if (!excluded(path)) a.push_back(l);
+      } else if (!gone->moved_to.empty()) {
+        const std::string moved = std::string(gone->moved_to) + l.substr(path.size());
+        if (!excluded(path_of(moved))) a.push_back(moved);
+      } else if (l.substr(std::min(l.size(), path.size() + 1)) != gone->only_value) {
+        refuse(l, "(nothing)", ": " + std::string(gone->path) + " was removed since (" + std::string(gone->why) + ")");
+      }
+    }
+  }
   // A checkpoint written before a parameter existed has no line for it: the run it continues
   // had the parameter's default behaviour (a new parameter defaults to the old behaviour), so a
   // current line at the default value is skipped (ours).
@@ -234,18 +259,22 @@ void check_fingerprint(const fs::path& checkpoint, const std::string& stored, co
   std::vector<std::string> b;
   for (const auto& l : lines(current))
     if (stored_paths.count(path_of(l)) || !defaults.count(l)) b.push_back(l);
-  if (a == b) return;
-  std::string there = "(nothing)", here = "(nothing)";
-  for (std::size_t i = 0; i < std::max(a.size(), b.size()); ++i) {
-    const std::string x = i < a.size() ? a[i] : "", y = i < b.size() ? b[i] : "";
-    if (x != y) {
-      there = x.empty() ? "(nothing)" : x;
-      here = y.empty() ? "(nothing)" : y;
-      break;
-    }
+  // Compared by path (an older checkpoint's lines may come in another order); the first
+  // difference named in this scenario's order.
+  std::map<std::string, std::string> there_by_path, here_by_path;
+  for (const auto& l : a) there_by_path[path_of(l)] = l;
+  for (const auto& l : b) here_by_path[path_of(l)] = l;
+  if (there_by_path == here_by_path) return;
+  for (const auto& l : b) {
+    const auto it = there_by_path.find(path_of(l));
+    if (it == there_by_path.end())
+      refuse("(nothing)", l, "");
+    else if (it->second != l)
+      refuse(it->second, l, "");
   }
-  throw InputError(std::string("the checkpoint in ") + checkpoint.string() + " belongs to another scenario: it has " + there +
-                   ", this scenario " + here + " (remove the checkpoint directory to start over)");
+  for (const auto& l : a)
+    if (!here_by_path.count(path_of(l))) refuse(l, "(nothing)", "");
+  refuse("(nothing)", "(nothing)", "");
 }
 
 }  // namespace systole::scene

@@ -46,8 +46,10 @@ class CheckpointDirectory {
 void write_state_file(const std::filesystem::path& file, const StateArchive& archive, const std::string& fingerprint);
 StateArchive read_state_file(const std::filesystem::path& file, std::string& fingerprint);
 
-// Compares a checkpoint's fingerprint with this scenario's: InputError naming the checkpoint and
-// the first parameter that differs (its value there and here) when they differ.
+// Compares a checkpoint's fingerprint with this scenario's, parameter by parameter: InputError
+// naming the checkpoint and the first parameter that differs (its value there and here) when they
+// differ. An older checkpoint's fields that moved since are compared under their new paths; a
+// removed field with the one value every run used is skipped (config/removed_fields.h).
 void check_fingerprint(const std::filesystem::path& checkpoint, const std::string& stored, const std::string& current);
 
 }  // namespace systole::scene

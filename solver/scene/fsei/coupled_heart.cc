@@ -19,7 +19,7 @@ std::vector<Link> heart_markers(const config::Scenario& s, const geometry::LeftH
 coupling::FluidModuleOptions fluid_module_options(const config::Fsei& fs) {
   coupling::FluidModuleOptions o;
   o.time_scale_ms = kTimeScaleMs;
-  o.carry_over_reference_cfl = fs.forcing_carry_over_reference_cfl;
+  o.carry_over_reference_cfl = fs.forcing.carry_over_reference_cfl;
   return o;
 }
 
@@ -54,7 +54,7 @@ CoupledHeart::CoupledHeart(const config::Scenario& scenario, const Resume& resum
       slabs(fluid_slabs(s, grid, marker_z_at_rest)),
       fluid(slabs, fluid_parameters(s, heart)),
       aorta_initial_ml(start_aorta_at_ground_pressure(s, heart, grid, fluid)),
-      forcing_parameters(fsei::forcing_parameters(s.fsei)),
+      forcing_parameters(fsei::forcing_parameters(s.fsei.forcing)),
       forcing(slabs, markers, forcing_parameters),
       fluid_module(fluid, markers, forcing, fluid_module_options(s.fsei)),
       tension(s, heart, group, resume.archive()),

@@ -137,7 +137,7 @@ std::string slabs_note(const CoupledHeart& h) {
 std::string aorta_note(const CoupledHeart& h) {
   const config::Fsei& fs = h.s.fsei;
   std::ostringstream m;
-  m << "aorta pre-tension: ground pressure " << fs.aortic_pressure_mmhg << " mmHg (";
+  m << "aorta pre-tension: ground pressure " << fs.aorta.ground_pressure_mmhg << " mmHg (";
   const double wall_share = h.aorta.wall_share();
   if (const auto& p = h.aorta.prestress())
     m << (wall_share < 1 ? std::to_string(wall_share) + " of it by " : std::string())
@@ -148,8 +148,8 @@ std::string aorta_note(const CoupledHeart& h) {
       << (wall_share < 1 ? "the rest by an outer load on the wall outside the Darcy region; " : "");
   else
     m << "outer load on the wall outside the Darcy region; ";
-  if (fs.aortic_pressure_ramp_ms > 0)
-    m << "ramped over " << fs.aortic_pressure_ramp_ms << " ms from the blood at rest)";
+  if (fs.aorta.pressure_ramp_ms > 0)
+    m << "ramped over " << fs.aorta.pressure_ramp_ms << " ms from the blood at rest)";
   else
     m << "the blood inside the aorta, " << h.aorta_initial_ml << " ml, started at it)";
   return m.str();
@@ -174,7 +174,7 @@ void setup_notes(const CoupledHeart& h, RunResult& result) {
       << " h of the plane's (walls: " << rings.rigid_wall_cells << " h), at the end) carry nothing over";
     result.notes.push_back(c.str());
   }
-  if (fs.aortic_pressure_mmhg > 0) result.notes.push_back(aorta_note(h));
+  if (fs.aorta.ground_pressure_mmhg > 0) result.notes.push_back(aorta_note(h));
 }
 
 }  // namespace

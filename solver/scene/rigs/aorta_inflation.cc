@@ -30,8 +30,8 @@ double signed_volume_mm3(const geometry::TriMesh& mesh, const std::vector<Vec3>&
 structure::ShellModel make_aorta(const config::Scenario& s, const geometry::LeftHeart& heart, double damping_per_ms) {
   if (!(damping_per_ms > 0))
     throw InputError("aorta inflation: damping_per_ms = " + std::to_string(damping_per_ms) + " must be > 0");
-  if (!s.fsei.aortic_outlet_held)
-    throw InputError("aorta inflation needs fsei.aortic_outlet_held = true: the lumen's volume is measured between "
+  if (!s.fsei.aorta.outlet_held)
+    throw InputError("aorta inflation needs fsei.aorta.outlet_held = true: the lumen's volume is measured between "
                      "fixed ends");
   structure::ShellOptions o = structure_options(s, heart.plane.z_mm);
   o.damping_per_ms = damping_per_ms;

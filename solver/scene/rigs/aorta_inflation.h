@@ -4,14 +4,14 @@
 // (docs/fsei.md, session 16), used by bench/structure/aorta_compliance and the tests.
 //
 // The aorta of the procedural heart with the scenes' options (tissue, structure.*, its Darcy
-// outlet held as fsei.aortic_outlet_held holds it, which it requires; the root anchored to the
+// outlet held as fsei.aorta.outlet_held holds it, which it requires; the root anchored to the
 // valvular plane) carries a
-// ground pressure p0 in one of the ways of fsei.aortic_pretension, generalised (ours):
+// ground pressure p0 in one of the ways of fsei.aorta.pretension, generalised (ours):
 //  - a share f of p0 by the wall's pre-stress: the springs' rest lengths from
 //    structure::membrane_prestress at f p0, so the built shape is in equilibrium with f p0 inside;
 //  - the rest, (1 - f) p0, by an outer follower load (the seed's "external force providing a
 //    ground pressure", the scene's outer load).
-// f = 1 is fsei.aortic_pretension = prestress, f = 0 the outer load. The blood's pressure p acts
+// f = 1 is fsei.aorta.pretension = prestress, f = 0 the outer load. The blood's pressure p acts
 // on the lumen as a follower load on every triangle outside the Darcy outlet (the loads of the
 // pre-stress and of the outer load), so at p = p0 the built shape is (nearly: the pre-stress's
 // smoothing leaves a residual) in equilibrium.
