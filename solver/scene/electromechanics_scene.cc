@@ -332,6 +332,50 @@ void report_em_progress(RunControl& control, const config::Scenario& scenario, d
   control.on_progress(r);
 }
 
+// How a beat is cut into synchronisation intervals and which of them are sampled.
+struct EmBeatPlan {
+  double period_ms, sync_ms;
+  long sample_every, field_every, progress_every;
+  bool want_fields;
+};
+
+// Advances beat b from beat_start_ms to the synchronisation point nearest b T, so beats do not
+// drift from the stimuli (which repeat at exact multiples of the period), sampling the record and
+// the field frames; polls cancel and reports progress. Returns the time reached, in ms.
+double run_em_beat(coupling::Scheduler& scheduler, const CoupledView& view, const EmBeatPlan& plan, int b,
+                   double beat_start_ms, BeatRecord& beat, std::vector<FieldFrame>& frames, RunControl& control,
+                   const config::Scenario& scenario, const std::map<std::string, double>& last_metrics) {
+  double t_ms = beat_start_ms;
+  const double period_ms = plan.period_ms, sync_ms = plan.sync_ms;
+  const long intervals_this_beat =
+      std::max(1L, std::lround(static_cast<double>(b) * period_ms / sync_ms) - std::lround(beat_start_ms / sync_ms));
+  for (long n = 1; n <= intervals_this_beat; ++n) {
+    t_ms = beat_start_ms + static_cast<double>(n) * sync_ms;
+    scheduler.advance_to(t_ms);
+    if (n % plan.sample_every == 0 || n == intervals_this_beat) sample_beat(beat, t_ms, view);
+    if (plan.want_fields && n % plan.field_every == 0) frames.push_back(field_frame(t_ms, view));
+    if (n % plan.progress_every == 0 || n == intervals_this_beat)
+      report_em_progress(control, scenario, t_ms, b, n, intervals_this_beat, view.lv, beat, last_metrics);
+  }
+  return t_ms;
+}
+
+// With fields wanted and frames kept: the last beat's frames in em_fields.h5 (+ .xmf) and a
+// note; fields_written is the number of frames written (0: none).
+void write_last_beat_fields(RunResult& result, bool want_fields, const std::vector<FieldFrame>& last_frames,
+                            const std::vector<std::unique_ptr<Chamber>>& chambers, RunControl& control,
+                            double field_interval_ms) {
+  result.metrics["fields_written"] = 0;
+  if (want_fields && !last_frames.empty()) {
+    std::vector<Chamber*> list;
+    for (auto& c : chambers) list.push_back(c.get());
+    write_fields(control.output_directory(), list, last_frames);
+    result.metrics["fields_written"] = static_cast<double>(last_frames.size());
+    result.notes.push_back("node positions, Vm and active tension of the last beat every " +
+                           std::to_string(field_interval_ms) + " ms in em_fields.h5 (+ em_fields.xmf)");
+  }
+}
+
 // One beat's metrics and the two numbers the run carries on: its EDV and largest volume mismatch.
 struct EmBeatResult {
   std::map<std::string, double> metrics;
@@ -536,24 +580,14 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   double t_ms = 0;
   // Progress (with the LV state) every ~20 ms of simulated time (ours).
   const long progress_every = std::max(1L, std::lround(20.0 / sync_ms));
+  const EmBeatPlan plan{period_ms, sync_ms, sample_every, field_every, progress_every, want_fields};
   for (int b = 1; b <= scenario.beats; ++b) {
     const double beat_start_ms = t_ms;
     beat.clear();
     frames.clear();
     sample_beat(beat, t_ms, view);
     if (want_fields) frames.push_back(field_frame(t_ms, view));
-    // The beat ends at the synchronisation point nearest b T, so beats do not drift from the
-    // stimuli (which repeat at exact multiples of the period).
-    const long intervals_this_beat =
-        std::max(1L, std::lround(static_cast<double>(b) * period_ms / sync_ms) - std::lround(beat_start_ms / sync_ms));
-    for (long n = 1; n <= intervals_this_beat; ++n) {
-      t_ms = beat_start_ms + static_cast<double>(n) * sync_ms;
-      scheduler.advance_to(t_ms);
-      if (n % sample_every == 0 || n == intervals_this_beat) sample_beat(beat, t_ms, view);
-      if (want_fields && n % field_every == 0) frames.push_back(field_frame(t_ms, view));
-      if (n % progress_every == 0 || n == intervals_this_beat)
-        report_em_progress(control, scenario, t_ms, b, n, intervals_this_beat, lv, beat, last_metrics);
-    }
+    t_ms = run_em_beat(scheduler, view, plan, b, beat_start_ms, beat, frames, control, scenario, last_metrics);
     // Beat metrics (the 0-D scene's definitions) and systolic kinematics.
     EmBeatResult r = em_beat_metrics(beat, lv_mesh, axis, beat_start_ms, period_ms, b, previous_edv, t_ms);
     std::map<std::string, double>& m = r.metrics;
@@ -580,15 +614,7 @@ RunResult run_electromechanics(const config::Scenario& scenario, RunControl& con
   result.metrics["heart_rate_bpm"] = scenario.heart_rate_bpm;
   add_run_metrics(result.metrics, st, view, ep_module.tissue_steps());
   if (scenario.outputs.time_series) result.series = beat_series(beat);
-  result.metrics["fields_written"] = 0;
-  if (want_fields && !last_frames.empty()) {
-    std::vector<Chamber*> list;
-    for (auto& c : chambers) list.push_back(c.get());
-    write_fields(control.output_directory(), list, last_frames);
-    result.metrics["fields_written"] = static_cast<double>(last_frames.size());
-    result.notes.push_back("node positions, Vm and active tension of the last beat every " +
-                           std::to_string(em.field_interval_ms) + " ms in em_fields.h5 (+ em_fields.xmf)");
-  }
+  write_last_beat_fields(result, want_fields, last_frames, chambers, control, em.field_interval_ms);
   add_run_notes(result, max_mismatch_ml, st, beats_done, periodic);
   return result;
 }
