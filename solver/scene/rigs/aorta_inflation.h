@@ -1,7 +1,7 @@
 #pragma once
 // The aorta alone, without blood, inflated quasi-statically: its compliance dV/dp around the
 // ground pressure, the dry counterpart of the afterload that scenes fsi and fsei see
-// (docs/fsei.md, session 16), used by bench/structure/aorta_compliance and the tests.
+// (docs/notes/fsei-notebook.md), used by bench/structure/aorta_compliance and the tests.
 //
 // The aorta of the procedural heart with the scenes' options (tissue, structure.*, its Darcy
 // outlet held as fsei.aorta.outlet_held holds it, which it requires; the root anchored to the

@@ -43,7 +43,7 @@ class ClosedValveLoad {
   // Mitral only: the distance (mm) between the two leaflets' free edges at their middles, the
   // mean x of each leaflet's nodes within 3 mm of its deepest built z (its free edge's middle
   // third; the built valve: valve_gap_mm apart, the leaflets facing each other across x). The
-  // opening's measure of docs/fsei.md (sessions 17, 34). Throws std::logic_error for the aortic
+  // opening's measure of docs/notes/fsei-notebook.md. Throws std::logic_error for the aortic
   // valve.
   double mitral_free_edge_gap_mm() const;
 
