@@ -468,6 +468,12 @@ std::vector<Param> build_table() {
                              "edges, the LV and LA of the procedural heart anchored at the valvular plane, its LV alone, "
                              "or its two mitral leaflets anchored at the annulus (pressure = LV minus LA, closing them)."));
   t.push_back(SYSTOLE_BOOL(structure.bending, true, "Bending springs on interior edges (eq 19)."));
+  t.push_back(SYSTOLE_CHOICE(structure.walls, "structure", (std::vector<std::string_view>{"structure", "chamber"}),
+                             "Scene 'mechanics', bodies 'lv' and 'left_heart': 'structure' builds the walls from tissue.* "
+                             "and structure.* as they read; 'chamber' builds them as scenes electromechanics, fsi and "
+                             "fsei do (electromechanics.spring_law, .passive_stiffness_scale, .isotropic_passive, "
+                             ".bending, and no active tension within electromechanics.passive_annulus_mm of the "
+                             "anchored ring), so the coupled scenes' walls can be loaded on their own."));
   t.push_back(SYSTOLE_REAL(structure.damping_per_ms, "1/ms", 0.1, 0, 100,
                            "Mass-proportional damping gamma in m x'' = F - gamma m x' (ours; 0: none)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.time_step_safety, "", 0.9, 0, 1,
@@ -483,7 +489,8 @@ std::vector<Param> build_table() {
                            "Scene 'mechanics': cavity pressure (normal load p A n / 3 per node of each triangle; "
                            "on a sheet, the pressure difference across it)."));
   t.push_back(SYSTOLE_REAL(structure.pressure_ramp_ms, "ms", 20, 0, 1e5,
-                           "Scene 'mechanics': pressure and active tension rise linearly over this time."));
+                           "Scene 'mechanics': pressure and active tension rise linearly over this time (updated at "
+                           "least 50 times over it)."));
   t.push_back(SYSTOLE_REAL(structure.active_tension_kpa, "kPa", 0, 0, 1000,
                            "Scene 'mechanics': uniform active fibre tension (eq 24) on every node (left heart: LV and LA)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.sphere_radius_mm, "mm", 20, 0, 200, "Body 'sphere': radius."));

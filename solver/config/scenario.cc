@@ -27,6 +27,13 @@ const std::vector<std::string>& implemented_scenes() {
   return scenes;
 }
 
+void check_mechanics_rules(const Scenario& s, std::vector<std::string>& errors) {
+  const Structure& st = s.structure;
+  if (st.walls == "chamber" && st.body != "lv" && st.body != "left_heart")
+    errors.push_back("structure.walls = \"chamber\" is not allowed with structure.body = \"" + st.body +
+                     "\"; allowed bodies: lv, left_heart (it builds the LV and LA walls as the coupled scenes do)");
+}
+
 namespace {
 
 std::string show(const nlohmann::json& value) {
@@ -275,6 +282,7 @@ void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
   check_fluid_rules(s, errors);
   if (s.scene == "fsi" || s.scene == "fsei") check_fsei_rules(s, errors);
   if (s.scene == "electromechanics") check_electromechanics_rules(s, errors);
+  if (s.scene == "mechanics") check_mechanics_rules(s, errors);
   bool implemented = false;
   for (const auto& n : implemented_scenes()) implemented = implemented || n == s.scene;
   if (!implemented) {

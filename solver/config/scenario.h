@@ -146,6 +146,7 @@ struct Analytic {
 struct Structure {
   std::string law;
   std::string body;
+  std::string walls;                    // "structure" | "chamber": bodies lv, left_heart as the coupled scenes build them
   bool bending;
   double damping_per_ms;
   double time_step_safety;
@@ -297,6 +298,10 @@ void apply_override(nlohmann::json& document, const std::string& assignment);
 
 // Scenes known to the project and the ones this build can run. A known but unimplemented
 // scene is rejected with a message listing the implemented ones (never a silent fallback).
+// Scene "mechanics": structure.walls = "chamber" needs structure.body "lv" or "left_heart".
+// Appends one message per problem (parse_scenario runs it; so does the scene registry).
+void check_mechanics_rules(const Scenario& scenario, std::vector<std::string>& errors);
+
 const std::vector<std::string>& known_scenes();
 const std::vector<std::string>& implemented_scenes();
 

@@ -1,6 +1,7 @@
 #include "solver/scene/mechanics_scene.h"
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/h5_dataset.h"
+#include "solver/scene/lv_wall_readings.h"
 
 #include <hdf5.h>
 #include <mpi.h>
@@ -35,10 +36,26 @@ struct Bodies {
   std::unique_ptr<BodyGroup> group;
   std::vector<double> volume0_mm3;
   std::vector<std::vector<Vec3>> built_mm;  // per body, its initial (built) positions
+  // Per body and node: 1 where the active tension acts, 0 in the passive annulus of the chamber
+  // walls (structure.walls = "chamber").
+  std::vector<std::vector<double>> active_share;
   std::size_t size() const { return group->body_count(); }
   const ShellModel& operator[](std::size_t k) const { return group->body(k); }
   ShellModel& operator[](std::size_t k) { return group->body(k); }
 };
+
+// The group of `models` (contact from structure.*), their initial volumes and positions, and
+// an active share of 1 on every node unless `bodies` already holds one per body.
+Bodies finish_bodies(Bodies bodies, std::vector<ShellModel> models, const config::Scenario& s) {
+  if (bodies.active_share.empty())
+    for (const auto& m : models) bodies.active_share.emplace_back(m.node_count(), 1.0);
+  bodies.group = std::make_unique<BodyGroup>(std::move(models), scene::contact_options(s));
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    bodies.volume0_mm3.push_back(bodies[k].cavity_volume_mm3());
+    bodies.built_mm.push_back(bodies[k].positions_mm());
+  }
+  return bodies;
+}
 
 Bodies build_bodies(const config::Scenario& s) {
   const config::Structure& st = s.structure;
@@ -72,17 +89,26 @@ Bodies build_bodies(const config::Scenario& s) {
           models.back().set_displacement_limit(-Vec3::UnitZ(), st.mitral_limit_mm, heart.body(name).position_mm);
       }
     } else {
-      models.emplace_back(heart.body(geometry::kLvBody), mat, opt);
-      if (st.body == "left_heart") models.emplace_back(heart.body(geometry::kLaBody), mat, opt);
+      // The chamber walls as they read (structure.walls "structure") or as the coupled scenes build them.
+      const bool chamber = st.walls == "chamber";
+      const structure::ShellMaterials wall_mat = chamber ? chamber_wall_materials(s) : mat;
+      const structure::ShellOptions wall_opt = chamber ? chamber_wall_options(s, heart.plane.z_mm) : opt;
+      models.emplace_back(heart.body(geometry::kLvBody), wall_mat, wall_opt);
+      if (st.body == "left_heart") models.emplace_back(heart.body(geometry::kLaBody), wall_mat, wall_opt);
+      if (chamber) {
+        Bodies bodies;
+        for (const auto& m : models) {
+          std::vector<std::int32_t> ep(m.node_count(), 0);
+          clear_passive_annulus(m.stress_free_mesh(), s.electromechanics.passive_annulus_mm, ep);
+          std::vector<double> share(ep.size());
+          for (std::size_t i = 0; i < ep.size(); ++i) share[i] = ep[i] < 0 ? 0.0 : 1.0;
+          bodies.active_share.push_back(std::move(share));
+        }
+        return finish_bodies(std::move(bodies), std::move(models), s);
+      }
     }
   }
-  Bodies bodies;
-  bodies.group = std::make_unique<BodyGroup>(std::move(models), scene::contact_options(s));
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    bodies.volume0_mm3.push_back(bodies[k].cavity_volume_mm3());
-    bodies.built_mm.push_back(bodies[k].positions_mm());
-  }
-  return bodies;
+  return finish_bodies(Bodies{}, std::move(models), s);
 }
 
 // Per-node largest |edge strain| (a nodal field for ParaView).
@@ -200,8 +226,11 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
   auto set_loads = [&](double t_ms) {
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       bodies[k].set_cavity_pressure(p_sign * p_full_kpa * ramp(t_ms));
-      if (st.active_tension_kpa > 0)
-        bodies[k].set_active_tension(std::vector<double>(bodies[k].node_count(), st.active_tension_kpa * ramp(t_ms)));
+      if (st.active_tension_kpa > 0) {
+        std::vector<double> tau = bodies.active_share[k];
+        for (double& v : tau) v *= st.active_tension_kpa * ramp(t_ms);
+        bodies[k].set_active_tension(std::move(tau));
+      }
     }
   };
 
@@ -248,6 +277,7 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
 
   const double dt0 = group.stable_step_ms();
   sample(0);
+  const double load_step_ms = st.pressure_ramp_ms > 0 ? st.pressure_ramp_ms / 50 : st.end_time_ms;
   const int steps = std::max(1, static_cast<int>(std::ceil(st.end_time_ms / st.output_interval_ms - 1e-9)));
   long substeps = 0;
   double nodes = 0;
@@ -257,9 +287,14 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
   for (int k = 1; k <= steps; ++k) {
     if (control.cancel_requested()) throw Cancelled();
     const double t_next = std::min(st.end_time_ms, k * st.output_interval_ms);
-    // Loads held over the outer step at their value at its middle (ours).
-    set_loads(0.5 * (t + t_next));
-    substeps += group.advance(t_next - t).substeps;
+    // Loads held over each load step at their value at its middle (ours); during the ramp a load
+    // step is at most 1/50 of it, so a coarse output interval does not jolt the body.
+    for (double ts = t; ts < t_next - 1e-12;) {
+      const double te = ts < st.pressure_ramp_ms ? std::min(t_next, ts + load_step_ms) : t_next;
+      set_loads(0.5 * (ts + te));
+      substeps += group.advance(te - ts).substeps;
+      ts = te;
+    }
     t = t_next;
     sample(t);
     ProgressReport report;
@@ -308,6 +343,7 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
       m[b.name() + "_max_strain"] = b.max_abs_strain();
     }
   }
+  if (st.body == "lv" || st.body == "left_heart") add_lv_wall_readings(main, "lv_", m);  // the LV is body 0
   if (st.body == "mitral_leaflets") {
     // Largest displacement of a leaflet node towards the LA (-z) from the built valve, to compare
     // with the limiter.

@@ -20,7 +20,8 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control);
 
 // The metrics run_mechanics always reports (of the primary body: sphere, sheet, LV or anterior
 // leaflet; contact_* over all bodies); several bodies or the LV add <body>_volume_*/_max_strain,
-// the mitral leaflets leaflet_displacement_towards_la_mm.
+// the mitral leaflets leaflet_displacement_towards_la_mm, the bodies "lv" and "left_heart" the
+// LV wall's readings (lv_wall_readings.h: lv_twist_deg, lv_gcs_percent, edge strains by direction).
 const std::vector<std::string>& mechanics_metric_names();
 
 }  // namespace systole::scene

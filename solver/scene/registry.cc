@@ -29,7 +29,7 @@ const std::vector<SceneEntry>& scene_registry() {
       {"electro", "electrophysiology alone on the left heart's walls, an imported heart, a sheet or a slab",
        run_electro, electro_metric_names},
       {"mechanics", "the structure alone (sphere, sheet, LV, LV + LA, mitral leaflets) under pressure and tension",
-       run_mechanics, mechanics_metric_names},
+       run_mechanics, mechanics_metric_names, config::check_mechanics_rules},
       {"ibm", "verification flows of the immersed boundary with the fluid (spheres, pipe, orifice plate)",
        run_ibm, ibm_metric_names},
       {"electromechanics", "EP -> active tension -> LV/LA shells <-> the 0-D circulation, without 3-D blood",

@@ -823,7 +823,7 @@ void ShellModel::check_min_step() const {
   if (dt_stable >= options_.min_step_ms) return;
   std::ostringstream what;
   what << "the stable step collapsed to " << dt_stable << " ms (< min_step_ms " << options_.min_step_ms
-       << "); largest edge strain " << worst_strain_;
+       << "); largest edge strain " << worst_strain_ << "; the step is set by " << stable_step_limiter();
   throw_instability(worst_edge_ >= 0 ? springs_[worst_edge_].i : 0, what.str());
 }
 

@@ -5,7 +5,11 @@
 #include <filesystem>
 
 #include "solver/core/errors.h"
+#include "solver/geometry/diagnostics.h"
+#include "solver/geometry/left_heart.h"
+#include "solver/scene/lv_wall_readings.h"
 #include "solver/scene/scene.h"
+#include "solver/structure/shell.h"
 
 namespace systole::scene {
 namespace {
@@ -88,6 +92,64 @@ TEST(MechanicsScene, BadStructureInputIsRejectedByTheTable) {
                InputError);
   EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"contact_stiffness_kpa_per_mm", -1}}}}),
                InputError);
+}
+
+
+// structure.walls = "chamber" builds the LV and LA walls: any other body is refused at parse,
+// naming the field, the value and what is allowed.
+TEST(MechanicsScene, ChamberWallsNeedAnLvBody) {
+  try {
+    config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"walls", "chamber"}, {"body", "sphere"}}}});
+    FAIL() << "accepted structure.walls = chamber with a sphere";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("structure.walls"), std::string::npos) << what;
+    EXPECT_NE(what.find("sphere"), std::string::npos) << what;
+    EXPECT_NE(what.find("lv, left_heart"), std::string::npos) << what;
+  }
+  EXPECT_NO_THROW(
+      config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"walls", "chamber"}, {"body", "lv"}}}}));
+}
+
+// The LV wall's readings on motions with known answers: a uniform scaling by 0.9 about the base
+// centre gives every edge eps = (l - l0)/l = -0.1/0.9, global strains of -10 %, a fibre stretch
+// of 0.9 and no twist; a rigid rotation about the long axis gives no strain and no twist.
+TEST(LvWallReadings, ExactOnScalingAndRotation) {
+  const config::Scenario s = config::default_scenario();
+  const geometry::LeftHeart heart = geometry::build_left_heart(s.geometry, s.fluid);
+  structure::ShellModel lv(heart.body(geometry::kLvBody), structure::materials_from_config(s.tissue),
+                           structure::ShellOptions{});
+  const geometry::ApexBaseAxis axis = geometry::apex_base_axis(lv.stress_free_mesh());
+  const std::vector<structure::Vec3> x0 = lv.positions_mm();
+  const std::vector<structure::Vec3> v0(x0.size(), structure::Vec3::Zero());
+
+  std::vector<structure::Vec3> x = x0;
+  for (auto& p : x) p = axis.base_centre_mm + 0.9 * (p - axis.base_centre_mm);
+  lv.set_state(x, v0);
+  std::map<std::string, double> m;
+  add_lv_wall_readings(lv, "lv_", m);
+  const double eps = -0.1 / 0.9;
+  for (const char* dir : {"fibre", "cross", "oblique"}) {
+    EXPECT_GT(m.at(std::string("lv_edges_") + dir), 0) << dir;
+    EXPECT_NEAR(m.at(std::string("lv_edge_strain_") + dir + "_min"), eps, 1e-9) << dir;
+    EXPECT_NEAR(m.at(std::string("lv_edge_strain_") + dir + "_max"), eps, 1e-9) << dir;
+  }
+  EXPECT_NEAR(m.at("lv_gcs_percent"), -10, 1e-9);
+  EXPECT_NEAR(m.at("lv_gls_percent"), -10, 1e-9);
+  EXPECT_NEAR(m.at("lv_twist_deg"), 0, 1e-9);
+  EXPECT_NEAR(m.at("lv_fibre_stretch_mean"), 0.9, 1e-9);
+
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.3, axis.direction).toRotationMatrix();
+  x = x0;
+  for (auto& p : x) p = axis.base_centre_mm + r * (p - axis.base_centre_mm);
+  lv.set_state(x, v0);
+  m.clear();
+  add_lv_wall_readings(lv, "lv_", m);
+  EXPECT_NEAR(m.at("lv_gcs_percent"), 0, 1e-9);
+  EXPECT_NEAR(m.at("lv_gls_percent"), 0, 1e-9);
+  EXPECT_NEAR(m.at("lv_twist_deg"), 0, 1e-9);
+  EXPECT_NEAR(m.at("lv_fibre_stretch_mean"), 1, 1e-9);
+  EXPECT_NEAR(m.at("lv_edge_strain_fibre_min"), 0, 1e-9);
 }
 
 }  // namespace
