@@ -36,6 +36,12 @@ WALLS = {
 _CAPPED = {"law": "fung_tension", "fung_exponent_cap": 6, "fung_compression_fraction": 1, "area_floor": 0.5}
 WALLS["printed_capped"] = {"structure": dict(WALLS["printed"]["structure"], **_CAPPED),
                            "tissue": dict(WALLS["printed"]["tissue"])}
+# The printed law on the constant-strain membrane triangles (structure.membrane = triangles):
+# eq 16's energy in the Green strain of the fibre frame, no cap, no area floor.
+WALLS["printed_membrane"] = {"structure": dict(WALLS["printed"]["structure"], membrane="triangles"),
+                             "tissue": dict(WALLS["printed"]["tissue"])}
+WALLS["printed_membrane_isotropic"] = {"structure": dict(WALLS["printed"]["structure"], membrane="triangles"),
+                                       "tissue": dict(WALLS["printed"]["tissue"], lv={"alpha_c": 49.56})}
 WALLS["printed_capped_isotropic"] = {"structure": dict(WALLS["printed"]["structure"], **_CAPPED),
                                      "tissue": dict(WALLS["printed"]["tissue"], lv={"alpha_c": 49.56})}
 

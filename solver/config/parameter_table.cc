@@ -449,6 +449,13 @@ std::vector<Param> build_table() {
                              "'fung_tension' share its small-strain modulus c alpha; 'fung_tension', ours: the Fung "
                              "exponential in tension only, capped at structure.fung_exponent_cap, linear in "
                              "compression)."));
+  t.push_back(SYSTOLE_CHOICE(structure.membrane, "springs", (std::vector<std::string_view>{"springs", "triangles"}),
+                             "In-plane model of every shell: 'springs' (eq 17-18, one Fung spring per edge) or "
+                             "'triangles' (ours: a constant-strain membrane triangle with eq 16's energy in eq 17's strain "
+                             "along its fibre and cross-fibre directions plus a shear term alpha_c gamma^2 / 2; takes "
+                             "structure.law = "
+                             "'fung' and, for the chamber walls, electromechanics.spring_law = 'fung'; "
+                             "docs/structure.md)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.fung_exponent_cap, "", 4, 0, 100,
                                     "Law 'fung_tension': the largest Fung exponent alpha eps^2; beyond it the stress "
                                     "grows linearly with the tangent there (ours; bounds the explicit stable step)."));

@@ -283,6 +283,17 @@ void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
   if (s.scene == "fsi" || s.scene == "fsei") check_fsei_rules(s, errors);
   if (s.scene == "electromechanics") check_electromechanics_rules(s, errors);
   if (s.scene == "mechanics") check_mechanics_rules(s, errors);
+  // The membrane triangles carry eq 16's Fung energy only (ShellOptions::membrane).
+  if (s.structure.membrane == "triangles") {
+    if (s.structure.law != "fung")
+      fail("structure.membrane = \"triangles\" takes structure.law = \"fung\" (the printed law); got \"" +
+           s.structure.law + "\"");
+    const bool walls = s.scene == "electromechanics" || s.scene == "fsi" || s.scene == "fsei" ||
+                       (s.scene == "mechanics" && s.structure.walls == "chamber");
+    if (walls && s.electromechanics.spring_law != "fung")
+      fail("structure.membrane = \"triangles\" takes electromechanics.spring_law = \"fung\" for the chamber walls; "
+           "got \"" + s.electromechanics.spring_law + "\"");
+  }
   bool implemented = false;
   for (const auto& n : implemented_scenes()) implemented = implemented || n == s.scene;
   if (!implemented) {

@@ -145,6 +145,7 @@ struct Analytic {
 // Scene "mechanics" and the structure module (solver/structure/README.md).
 struct Structure {
   std::string law;
+  std::string membrane;                 // "springs" | "triangles": ShellOptions::membrane (ours)
   std::string body;
   std::string walls;                    // "structure" | "chamber": bodies lv, left_heart as the coupled scenes build them
   bool bending;

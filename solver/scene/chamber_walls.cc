@@ -19,6 +19,7 @@ structure::ShellMaterials chamber_wall_materials(const config::Scenario& s) {
 structure::ShellOptions structure_options(const config::Scenario& s, double plane_z_mm) {
   structure::ShellOptions o;
   o.law = s.structure.law;
+  o.membrane = s.structure.membrane;
   o.fung_exponent_cap = s.structure.fung_exponent_cap;
   o.fung_compression_fraction = s.structure.fung_compression_fraction;
   o.bending = s.structure.bending;

@@ -99,6 +99,15 @@ void spring_loop(const std::vector<EdgeSpring>& springs, const std::vector<Vec3>
   }
 }
 
+// The edges as strain probes only (options.membrane = "triangles": the triangles carry the
+// in-plane stress; the edges still report strains and trip the strain limit).
+struct StrainOnly {
+  static void stress_tangent(double, double, double, const LawParams&, double& tau, double& dtau) {
+    tau = 0;
+    dtau = 0;
+  }
+};
+
 }  // namespace
 
 ShellMaterials materials_from_config(const config::Tissue& t) {
@@ -161,6 +170,11 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
                      " must be in [0, 1]");
   if (!(options.fung_exponent_cap > 0))
     throw InputError(body + ": structure.fung_exponent_cap = " + fmt(options.fung_exponent_cap) + " must be > 0");
+  if (options.membrane != "springs" && options.membrane != "triangles")
+    throw InputError(body + ": structure.membrane = '" + options.membrane + "' is not known; known: springs, triangles");
+  if (options.membrane == "triangles" && options.law != "fung")
+    throw InputError(body + ": structure.membrane = 'triangles' takes the Fung law as printed (law 'fung'); got law '" +
+                     options.law + "'");
   if (!(options.damping_per_ms >= 0))
     throw InputError(body + ": damping_per_ms = " + fmt(options.damping_per_ms) + " must be >= 0");
   if (options.threads < 1 || options.threads > 256)
@@ -290,6 +304,7 @@ ShellModel::ShellModel(const geometry::TriMesh& stress_free, const ShellMaterial
     active_.push_back({tr[0], tr[1], tr[2], w0, w1, v0, v1, mesh_.thickness_mm[t] * area[t]});
   }
   active_tension_kpa_.assign(nn, 0.0);
+  if (options.membrane == "triangles") build_membrane(materials);
   if (options.area_floor > 0) {
     floor_area_mm2_ = area;
     floor_kappa_s_.resize(nt);
@@ -399,6 +414,7 @@ void ShellModel::set_state(std::vector<Vec3> x_mm, std::vector<Vec3> v_mm_per_ms
 // ---------------------------------------------------------------------------------------------
 // Force kernels
 void ShellModel::add_spring_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f) const {
+  if (!membrane_.empty()) return;  // the edges are strain probes only
   double worst = 0;
   std::int32_t we = -1, bad = -1;
   const double inf = std::numeric_limits<double>::infinity();
@@ -417,6 +433,7 @@ void ShellModel::add_spring_forces(const std::vector<Vec3>& x, std::vector<Vec3>
 
 double ShellModel::spring_energy(const std::vector<Vec3>& x) const {
   double w = 0;
+  if (!membrane_.empty()) return w;
   for (const EdgeSpring& s : springs_) {
     const double l = (x[s.j] - x[s.i]).norm();
     w += edge_energy(*law_, 1 - s.rest_length_mm / l, s.c_kpa, s.alpha, LawParams{options_.fung_exponent_cap, options_.fung_compression_fraction}, s.cross_section_mm3);
@@ -561,7 +578,8 @@ void ShellModel::internal_forces_range(Vec3* f, double* row, std::int32_t s0, st
                                        std::int32_t& bad) const {
   const double lim = options_.strain_limit;
   const LawParams q{options_.fung_exponent_cap, options_.fung_compression_fraction};
-  switch (law_->kind) {
+  if (!membrane_.empty()) spring_loop<StrainOnly>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1);
+  else switch (law_->kind) {
     case LawKind::kFung: spring_loop<kernels::Fung>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1); break;
     case LawKind::kLinear:
       spring_loop<kernels::Linear>(springs_, x_, q, f, row, lim, worst, worst_edge, bad, s0, s1);
@@ -674,6 +692,7 @@ void ShellModel::compute_forces() {
     }
   }
   add_area_floor_forces(x_, force_, row);
+  add_membrane_forces(x_, force_, row);
   add_pressure_forces(x_, force_);
   if (!contact_force_.empty())
     for (std::size_t i = 0; i < nn; ++i) {
@@ -908,7 +927,7 @@ AdvanceStats ShellModel::advance(double T_ms) {
 Energies ShellModel::energies() const {
   Energies e;
   for (std::size_t i = 0; i < node_count(); ++i) e.kinetic_uj += 0.5 * mass_[i] * v_[i].squaredNorm();
-  e.elastic_uj = spring_energy(x_) + area_floor_energy(x_);
+  e.elastic_uj = spring_energy(x_) + area_floor_energy(x_) + membrane_energy(x_);
   e.bending_uj = bending_energy(x_);
   e.active_uj = active_energy(x_);
   double lp = 0;

@@ -62,6 +62,13 @@ ShellMaterials materials_from_config(const config::Tissue& tissue);
 
 struct ShellOptions {
   std::string law = "fung";        // spring_laws() name
+  // The in-plane model: "springs" (eq 17-18, one Fung spring per edge) or "triangles" (ours: a
+  // constant-strain membrane triangle per face with eq 16's energy, W = s A0 (c/2)(e^Q - 1),
+  // Q = alpha_f eps_f^2 + alpha_c eps_c^2 + alpha_c gamma^2 / 2, eps = 1 - 1/lambda (eq 17's
+  // strain) along the triangle's fibre and cross-fibre directions and gamma the shear of that
+  // pair (membrane.cc; the shear term, absent from eq 16, removes the zero-energy shear mode).
+  // "triangles" takes law "fung" only; the edges stay as strain probes.
+  std::string membrane = "springs";
   double fung_exponent_cap = 4;    // law "fung_tension": the largest exponent a eps^2 (ours)
   double fung_compression_fraction = 0;  // law "fung_tension": share of the (capped) Fung
                                          // stiffening kept in compression (ours)
@@ -252,6 +259,10 @@ class ShellModel {
   double bending_energy(const std::vector<Vec3>& x) const;
   double active_energy(const std::vector<Vec3>& x) const;
   double area_floor_energy(const std::vector<Vec3>& x) const;
+  // The membrane triangles' energy (options.membrane = "triangles"; 0 otherwise).
+  double membrane_energy(const std::vector<Vec3>& x) const;
+  // Adds the membrane triangles' forces; with row != nullptr also their Gershgorin row sums.
+  void add_membrane_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f, double* row = nullptr) const;
   // Adds the area floor's forces; with row != nullptr also its Gershgorin row sums (see
   // compute_forces).
   void add_area_floor_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f, double* row = nullptr) const;
@@ -267,6 +278,16 @@ class ShellModel {
     double v0, v1;          // reference cross-fibre c0 = n x f0, the same way
     double volume_mm3;      // s A (stress-free)
   };
+  // A constant-strain membrane triangle (options.membrane = "triangles"): reference gradients of
+  // its three shape functions in the (fibre, cross-fibre) frame of its stress-free plane, so that
+  // F = sum_k x_k g_k^T (3 x 2) and E = (F^T F - I)/2 are in the fibre frame.
+  struct MembraneTriangle {
+    std::int32_t node[3];
+    double g[3][2];
+    double volume_mm3;            // s A0
+    double c_kpa, alpha_f, alpha_c;
+  };
+  void build_membrane(const ShellMaterials& materials);  // membrane_ from the stress-free mesh (membrane.cc)
   void compute_forces();  // force_ at x_, records the worst strain
   void internal_forces_range(Vec3* f, double* row, std::int32_t s0, std::int32_t s1, std::int32_t h0, std::int32_t h1,
                              double& worst, std::int32_t& worst_edge, std::int32_t& bad) const;
@@ -282,6 +303,7 @@ class ShellModel {
   std::vector<EdgeSpring> springs_;
   std::vector<BendingHinge> hinges_;
   std::vector<ActiveTriangle> active_;
+  std::vector<MembraneTriangle> membrane_;  // empty unless options.membrane = "triangles"
   std::vector<double> active_tension_kpa_;  // per node
   std::vector<double> floor_area_mm2_, floor_kappa_s_;  // area floor: A0 and kappa s per triangle (empty: off)
   bool active_on_ = false;
