@@ -18,6 +18,7 @@
 #include "solver/core/errors.h"
 #include "solver/structure/shapes.h"
 #include "solver/structure/shell.h"
+#include "tests/structure/sphere_inflation.h"
 
 namespace systole::structure {
 namespace {
@@ -162,19 +163,7 @@ double predicted_lambda(double p, double s, double r0, double alpha) {
 }
 
 double inflate(int level, double p, double r0, double s) {
-  ShellOptions opt = membrane_options();
-  opt.damping_per_ms = 0.15;
-  ShellModel body(icosphere(r0, level, s, Tissue::kLvMyocardium, false), seed_materials(), opt);
-  body.set_cavity_pressure(p);
-  for (int k = 0; k < 400; ++k) {
-    body.advance(10);
-    double fmax = 0;
-    for (const auto& f : body.forces_mn()) fmax = std::max(fmax, f.norm());
-    if (fmax < 1e-9 * p * r0 * r0 && body.energies().kinetic_uj < 1e-14) break;
-  }
-  double r = 0;
-  for (const auto& x : body.positions_mm()) r += x.norm();
-  return r / static_cast<double>(body.node_count()) / r0;
+  return testing::inflate_to_rest(level, p, r0, s, seed_materials(), membrane_options());
 }
 
 TEST(Membrane, InflatedIsotropicSphereReachesTheMembraneRadius) {
