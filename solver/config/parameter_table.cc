@@ -501,6 +501,23 @@ std::vector<Param> build_table() {
   t.push_back(SYSTOLE_REAL(structure.active_tension_kpa, "kPa", 0, 0, 1000,
                            "Scene 'mechanics': uniform active fibre tension (eq 24) on every node (left heart: LV and LA)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.sphere_radius_mm, "mm", 20, 0, 200, "Body 'sphere': radius."));
+  t.push_back(SYSTOLE_CHOICE(structure.protocol, "ramp", (std::vector<std::string_view>{"ramp", "pv_relations"}),
+                             "Scene 'mechanics': 'ramp' loads the body once (pressure and tension over "
+                             "structure.pressure_ramp_ms, then held to structure.end_time_ms); 'pv_relations' (body "
+                             "'lv') steps the LV through its end-diastolic (passive, 0 to structure.edpvr_max_mmhg) "
+                             "and end-systolic (structure.active_tension_kpa, structure.espvr_min_mmhg to "
+                             "structure.espvr_max_mmhg) pressure-volume relations, each point ramped over "
+                             "structure.pressure_ramp_ms and held to rest (at most structure.end_time_ms), and "
+                             "fits them (docs/structure.md)."));
+  t.push_back(SYSTOLE_REAL(structure.edpvr_max_mmhg, "mmHg", 30, 0, 100,
+                           "Protocol 'pv_relations': the EDPVR's highest pressure (0: no EDPVR)."));
+  t.push_back(SYSTOLE_REAL(structure.espvr_min_mmhg, "mmHg", 80, 0, 300,
+                           "Protocol 'pv_relations': the ESPVR's lowest pressure."));
+  t.push_back(SYSTOLE_REAL(structure.espvr_max_mmhg, "mmHg", 120, 0, 300,
+                           "Protocol 'pv_relations': the ESPVR's highest pressure (the ESPVR needs "
+                           "structure.active_tension_kpa > 0)."));
+  t.push_back(SYSTOLE_INT(structure.pv_points, "", 4, 2, 20,
+                          "Protocol 'pv_relations': loaded points per relation (the EDPVR adds its unloaded point)."));
   t.push_back(SYSTOLE_INT(structure.sphere_refinement, "", 3, 0, 7,
                           "Body 'sphere': icosahedron subdivisions (10 * 4^n + 2 nodes)."));
   t.push_back(SYSTOLE_POSITIVE_REAL(structure.shell_thickness_mm, "mm", 2, 0, 50, "Bodies 'sphere' and 'sheet': thickness."));

@@ -29,6 +29,17 @@ const std::vector<std::string>& implemented_scenes() {
 
 void check_mechanics_rules(const Scenario& s, std::vector<std::string>& errors) {
   const Structure& st = s.structure;
+  if (st.protocol == "pv_relations") {
+    if (st.body != "lv")
+      errors.push_back("structure.protocol = \"pv_relations\" is not allowed with structure.body = \"" + st.body +
+                       "\"; allowed body: lv");
+    if (!(st.espvr_max_mmhg > st.espvr_min_mmhg) && st.active_tension_kpa > 0)
+      errors.push_back("structure.espvr_max_mmhg = " + std::to_string(st.espvr_max_mmhg) +
+                       " must exceed structure.espvr_min_mmhg = " + std::to_string(st.espvr_min_mmhg));
+    if (st.edpvr_max_mmhg <= 0 && !(st.active_tension_kpa > 0))
+      errors.push_back("structure.protocol = \"pv_relations\" has nothing to do: structure.edpvr_max_mmhg = 0 and "
+                       "structure.active_tension_kpa = 0; set either");
+  }
   if (st.walls == "chamber" && st.body != "lv" && st.body != "left_heart")
     errors.push_back("structure.walls = \"chamber\" is not allowed with structure.body = \"" + st.body +
                      "\"; allowed bodies: lv, left_heart (it builds the LV and LA walls as the coupled scenes do)");

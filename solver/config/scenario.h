@@ -148,6 +148,10 @@ struct Structure {
   std::string membrane;                 // "springs" | "triangles": ShellOptions::membrane (ours)
   std::string body;
   std::string walls;                    // "structure" | "chamber": bodies lv, left_heart as the coupled scenes build them
+  std::string protocol;                 // scene mechanics: "ramp" | "pv_relations"
+  double edpvr_max_mmhg;                // protocol pv_relations: EDPVR from 0 to this (0: none)
+  double espvr_min_mmhg, espvr_max_mmhg;  // protocol pv_relations: the ESPVR's pressures
+  int pv_points;                        // protocol pv_relations: loaded points per relation
   bool bending;
   double damping_per_ms;
   double time_step_safety;

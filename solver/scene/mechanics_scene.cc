@@ -2,6 +2,7 @@
 #include "solver/scene/chamber_walls.h"
 #include "solver/scene/h5_dataset.h"
 #include "solver/scene/lv_wall_readings.h"
+#include "solver/scene/pv_relations.h"
 
 #include <hdf5.h>
 #include <mpi.h>
@@ -203,6 +204,126 @@ double mean_abs_strain(const ShellModel& m) {
   return eps.empty() ? 0 : s / static_cast<double>(eps.size());
 }
 
+// --- protocol "pv_relations" ----------------------------------------------------------------
+// The LV (body 0) loaded by a cavity pressure and a uniform active tension (times the active share).
+void set_lv_loads(Bodies& bodies, double p_mmhg, double tau_kpa) {
+  bodies[0].set_cavity_pressure(p_mmhg * units::kPaPerMmHg * 1e-3);
+  std::vector<double> tau = bodies.active_share[0];
+  for (double& v : tau) v *= tau_kpa;
+  bodies[0].set_active_tension(std::move(tau));
+}
+
+// Ramps the LV's loads linearly from (p0, tau0) to (p1, tau1) over structure.pressure_ramp_ms in
+// steps of at most 1/50 of it, then holds them, structure.output_interval_ms at a time, until the
+// cavity volume changes by < 1e-6 of itself over an interval and the kinetic energy is < 1e-9 of
+// the elastic (ours); returns the volume (ml). Throws std::runtime_error naming the point when the
+// hold passes structure.end_time_ms.
+double load_to_rest(Bodies& bodies, const config::Structure& st, double p0, double p1, double tau0, double tau1,
+                    RunControl& control, long& substeps) {
+  const double ramp = st.pressure_ramp_ms, step = ramp > 0 ? ramp / 50 : 0;
+  for (double t = 0; t < ramp - 1e-12;) {
+    if (control.cancel_requested()) throw Cancelled();
+    const double te = std::min(ramp, t + step), w = 0.5 * (t + te) / ramp;
+    set_lv_loads(bodies, p0 + w * (p1 - p0), tau0 + w * (tau1 - tau0));
+    substeps += bodies.group->advance(te - t).substeps;
+    t = te;
+  }
+  set_lv_loads(bodies, p1, tau1);
+  double v = bodies[0].cavity_volume_mm3(), held = 0;
+  for (;;) {
+    if (control.cancel_requested()) throw Cancelled();
+    substeps += bodies.group->advance(st.output_interval_ms).substeps;
+    held += st.output_interval_ms;
+    const double v_new = bodies[0].cavity_volume_mm3();
+    const auto e = bodies[0].energies();
+    const bool rest = std::abs(v_new - v) < 1e-6 * std::abs(v_new) && e.kinetic_uj < 1e-9 * std::abs(e.elastic_uj);
+    v = v_new;
+    if (rest) return v * 1e-3;
+    if (held >= st.end_time_ms) {
+      std::ostringstream m;
+      m << "mechanics pv_relations: the LV did not come to rest at " << p1 << " mmHg and " << tau1
+        << " kPa within structure.end_time_ms = " << st.end_time_ms << " ms (volume " << v * 1e-3
+        << " ml, kinetic / elastic energy " << e.kinetic_uj / std::abs(e.elastic_uj)
+        << "); raise structure.end_time_ms or structure.damping_per_ms";
+      throw std::runtime_error(m.str());
+    }
+  }
+}
+
+RunResult run_pv_relations(const config::Scenario& scenario, RunControl& control) {
+  const config::Structure& st = scenario.structure;
+  const auto start = std::chrono::steady_clock::now();
+  Bodies bodies = build_bodies(scenario);
+  const int n = st.pv_points;
+  std::vector<PvPoint> ed, es;
+  long substeps = 0;
+  const int total = (st.edpvr_max_mmhg > 0 ? n : 0) + (st.active_tension_kpa > 0 ? n : 0);
+  int done = 0;
+  auto progress = [&](const char* relation, double p_mmhg) {
+    std::ostringstream what;
+    what << relation << " point at " << p_mmhg << " mmHg at rest";
+    ProgressReport r;
+    r.beat = 1;
+    r.beats_total = 1;
+    r.fraction = total > 0 ? static_cast<double>(++done) / total : 1;
+    r.message = "mechanics pv_relations: " + what.str();
+    control.on_progress(r);
+  };
+  double p = 0;
+  if (st.edpvr_max_mmhg > 0) {
+    ed.push_back({0, bodies[0].cavity_volume_mm3() * 1e-3});
+    for (int k = 1; k <= n; ++k) {
+      const double pk = st.edpvr_max_mmhg * k / n;
+      ed.push_back({pk, load_to_rest(bodies, st, p, pk, 0, 0, control, substeps)});
+      p = pk;
+      progress("EDPVR", pk);
+    }
+  }
+  if (st.active_tension_kpa > 0) {
+    double tau = 0;
+    for (int k = 0; k < n; ++k) {
+      const double pk = st.espvr_min_mmhg + (st.espvr_max_mmhg - st.espvr_min_mmhg) * k / (n - 1);
+      es.push_back({pk, load_to_rest(bodies, st, p, pk, tau, st.active_tension_kpa, control, substeps)});
+      p = pk;
+      tau = st.active_tension_kpa;
+      progress("ESPVR", pk);
+    }
+  }
+  RunResult result;
+  auto& m = result.metrics;
+  m["volume_initial_ml"] = bodies.volume0_mm3.front() * 1e-3;
+  m["substeps"] = static_cast<double>(substeps);
+  m["nodes"] = static_cast<double>(bodies[0].node_count());
+  if (!ed.empty()) {
+    const EdpvrFit f = fit_edpvr(ed);
+    m["edpvr_v0_ml"] = f.v0_ml;
+    m["edpvr_a_mmhg"] = f.a_mmhg;
+    m["edpvr_beta_per_ml"] = f.beta_per_ml;
+    m["edpvr_fit_rms_mmhg"] = f.rms_mmhg;
+    m["edpvr_volume_at_max_ml"] = ed.back().volume_ml;
+  }
+  if (!es.empty()) {
+    const EspvrFit f = fit_espvr(es);
+    m["espvr_e_es_mmhg_per_ml"] = f.e_es_mmhg_per_ml;
+    m["espvr_v0_ml"] = f.v0_ml;
+    m["espvr_fit_r2"] = f.r2;
+    m["espvr_volume_at_min_ml"] = es.front().volume_ml;
+    m["espvr_volume_at_max_ml"] = es.back().volume_ml;
+    add_lv_wall_readings(bodies[0], "lv_", m);  // at the ESPVR's highest pressure
+  }
+  const std::filesystem::path dir = control.output_directory();
+  if (!dir.empty() && is_rank_zero()) {
+    std::filesystem::create_directories(dir);
+    std::ofstream csv(dir / "pv_relations.csv");
+    csv << "relation,pressure_mmhg,volume_ml\n";
+    for (const PvPoint& q : ed) csv << "edpvr," << q.pressure_mmhg << "," << q.volume_ml << "\n";
+    for (const PvPoint& q : es) csv << "espvr," << q.pressure_mmhg << "," << q.volume_ml << "\n";
+    result.notes.push_back("the measured points in pv_relations.csv (plot: client/systole-plot-pv)");
+  }
+  m["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
 }  // namespace
 
 const std::vector<std::string>& mechanics_metric_names() {
@@ -216,6 +337,7 @@ const std::vector<std::string>& mechanics_metric_names() {
 
 RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
   const config::Structure& st = scenario.structure;
+  if (st.protocol == "pv_relations") return run_pv_relations(scenario, control);
   const auto start = std::chrono::steady_clock::now();
   Bodies bodies = build_bodies(scenario);
   BodyGroup& group = *bodies.group;

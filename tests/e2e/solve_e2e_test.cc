@@ -53,6 +53,38 @@ TEST(SolveE2E, PlotBeatDrawsTheWiggersDiagramAndThePvLoop) {
   fs::remove_all(dir);
 }
 
+// Scene mechanics' protocol pv_relations through the CLI (a coarse LV): pv_relations.csv holds
+// the points, and systole-plot-pv draws them with the fits.
+TEST(SolveE2E, PvRelationsAndTheirPlot) {
+  const fs::path dir = make_temp_dir("plot-pv");
+  {
+    std::ofstream f(dir / "scenario.json");
+    f << R"({"scene": "mechanics", "geometry": {"target_edge_mm": 4},
+             "structure": {"body": "lv", "walls": "chamber", "protocol": "pv_relations", "pv_points": 2,
+                           "edpvr_max_mmhg": 20, "active_tension_kpa": 120, "pressure_ramp_ms": 20,
+                           "output_interval_ms": 2, "end_time_ms": 300, "write_positions": false}})";
+  }
+  const auto [c1, out1] = run_command((bin_dir() / "systole-solve").string() + " " + (dir / "scenario.json").string() +
+                                      " --quiet --out " + dir.string());
+  ASSERT_EQ(c1, 0) << out1;
+  std::ifstream csv(dir / "pv_relations.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 1 + 3 + 2);  // header, EDPVR 0/10/20 mmHg, ESPVR 80/120 mmHg
+  const std::string plot = (bin_dir() / "systole-plot-pv").string();
+  ASSERT_TRUE(fs::exists(plot)) << plot;
+  const auto [check, why] = run_command(plot + " --check");
+  if (check != 0) GTEST_SKIP() << "matplotlib not installed: " << why;
+  const auto [code, out] = run_command(plot + " " + dir.string());
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_GT(fs::file_size(dir / "pv_relations.png"), 10000u);
+  const auto [bad, message] = run_command(plot + " " + (dir / "nowhere").string() + " 2>&1");
+  EXPECT_EQ(bad, 2) << message;
+  EXPECT_NE(message.find("pv_relations.csv not found"), std::string::npos) << message;
+  fs::remove_all(dir);
+}
+
 TEST(SolveE2E, ListScenesPrintsTheRegistry) {
   const std::string solve = (bin_dir() / "systole-solve").string();
   // stdout only (the table); stderr (MPI's notes, if any) is not part of it.

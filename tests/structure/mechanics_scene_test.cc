@@ -8,6 +8,7 @@
 #include "solver/geometry/diagnostics.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/scene/lv_wall_readings.h"
+#include "solver/scene/pv_relations.h"
 #include "solver/scene/scene.h"
 #include "solver/structure/shell.h"
 
@@ -150,6 +151,58 @@ TEST(LvWallReadings, ExactOnScalingAndRotation) {
   EXPECT_NEAR(m.at("lv_twist_deg"), 0, 1e-9);
   EXPECT_NEAR(m.at("lv_fibre_stretch_mean"), 1, 1e-9);
   EXPECT_NEAR(m.at("lv_edge_strain_fibre_min"), 0, 1e-9);
+}
+
+
+// The fits on exact relations: P = 2.5 (V - 20) and P = 1.8 (exp(0.045 (V - 110)) - 1).
+TEST(PvRelations, FitsRecoverExactRelations) {
+  std::vector<PvPoint> es, ed{{0, 110}};
+  for (double v : {50.0, 60.0, 75.0}) es.push_back({2.5 * (v - 20), v});
+  for (double v : {120.0, 135.0, 150.0, 170.0}) ed.push_back({1.8 * std::expm1(0.045 * (v - 110)), v});
+  const EspvrFit f = fit_espvr(es);
+  EXPECT_NEAR(f.e_es_mmhg_per_ml, 2.5, 1e-12);
+  EXPECT_NEAR(f.v0_ml, 20, 1e-10);
+  EXPECT_NEAR(f.r2, 1, 1e-12);
+  const EdpvrFit g = fit_edpvr(ed);
+  EXPECT_NEAR(g.v0_ml, 110, 0);
+  EXPECT_NEAR(g.beta_per_ml, 0.045, 1e-7);
+  EXPECT_NEAR(g.a_mmhg, 1.8, 1e-5);
+  EXPECT_LT(g.rms_mmhg, 1e-6);
+  EXPECT_THROW(fit_espvr({{80, 60}}), std::invalid_argument);
+  EXPECT_THROW(fit_edpvr({{5, 110}, {10, 120}, {20, 130}}), std::invalid_argument);  // no unloaded point
+}
+
+// Protocol pv_relations on the coupled scenes' walls: the EDPVR rises, the ESPVR rises with a
+// positive E_es, and its point at 80 mmHg is the equilibrium that a single ramp to the same loads
+// reaches (a different load path: the points are states at rest, not path artefacts).
+TEST(MechanicsScene, PvRelationsMatchASingleRampToTheSameLoads) {
+  const nlohmann::json base = {{"scene", "mechanics"},
+                               {"geometry", {{"target_edge_mm", 4}}},  // a coarse LV: a cheap test
+                               {"structure",
+                                {{"body", "lv"}, {"walls", "chamber"}, {"active_tension_kpa", 120},
+                                 {"pressure_ramp_ms", 20}, {"output_interval_ms", 2}, {"end_time_ms", 300},
+                                 {"write_positions", false}}}};
+  nlohmann::json pv = base;
+  pv["structure"]["protocol"] = "pv_relations";
+  pv["structure"]["pv_points"] = 2;
+  pv["structure"]["edpvr_max_mmhg"] = 20;
+  pv["structure"]["espvr_min_mmhg"] = 80;
+  pv["structure"]["espvr_max_mmhg"] = 110;
+  Control control({});
+  const RunResult r = run(config::parse_scenario(pv), control);
+  const auto& m = r.metrics;
+  EXPECT_EQ(control.reports, 4);
+  EXPECT_GT(m.at("edpvr_volume_at_max_ml"), m.at("edpvr_v0_ml") + 10);
+  EXPECT_GT(m.at("edpvr_beta_per_ml"), 0);
+  EXPECT_GT(m.at("espvr_e_es_mmhg_per_ml"), 0);
+  EXPECT_GT(m.at("espvr_volume_at_max_ml"), m.at("espvr_volume_at_min_ml"));
+  nlohmann::json ramp = base;
+  ramp["structure"]["cavity_pressure_mmhg"] = 80;
+  Control c2({});
+  const RunResult single = run(config::parse_scenario(ramp), c2);
+  EXPECT_NEAR(m.at("espvr_volume_at_min_ml"), single.metrics.at("lv_volume_final_ml"), 0.05);
+  EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"protocol", "pv_relations"}}}}),
+               InputError);  // body sphere
 }
 
 }  // namespace
