@@ -6,6 +6,7 @@
 //   systole-solve --list-scenes            (the scene registry: name, metric count, description)
 #include <mpi.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iomanip>
@@ -105,10 +106,22 @@ int main(int argc, char** argv) {
       if (rank == 0) {
         const auto files = io::write_results(out_dir, result, {config::to_json(scenario).dump(), ""});
         std::cout << std::fixed << std::setprecision(2);
-        for (const auto& key : scene::metric_names(scenario.scene)) {
+        const auto& listed = scene::metric_names(scenario.scene);
+        for (const auto& key : listed) {
           const auto it = result.metrics.find(key);
           if (it != result.metrics.end()) std::cout << std::left << std::setw(32) << key << " " << it->second << "\n";
         }
+        // Then what this run reported beyond the scene's fixed list (a protocol's or a body's own
+        // metrics), at most 40 of them.
+        int extra = 0, more = 0;
+        for (const auto& [key, value] : result.metrics) {
+          if (std::find(listed.begin(), listed.end(), key) != listed.end()) continue;
+          if (++extra <= 40)
+            std::cout << std::left << std::setw(32) << key << " " << std::defaultfloat << std::setprecision(6) << value
+                      << "\n";
+          else ++more;
+        }
+        if (more > 0) std::cout << "(" << more << " more in metrics.json)\n";
         for (const auto& f : files) std::cout << "wrote " << f.string() << "\n";
       }
     }
