@@ -8,7 +8,11 @@ together over structure.pressure_ramp_ms and held, damped, to equilibrium; print
 row per run and E_es = 30 mmHg / (V(110) - V(80)) per tension.
 
   python3 bench/structure/tissue_lock.py [--solve build/bin/systole-solve] [--out bench-out/tissue_lock]
-      [--walls calibrated,printed] [--end-ms 300] [--tensions 80,120,160] [--pressures 80,110]
+      [--walls W1,W2,...] [--end-ms 300] [--tensions 80,120,160] [--pressures 80,110] [--extra JSON]
+
+Walls (WALLS below): calibrated, printed, printed_capped, printed_capped_isotropic,
+printed_membrane, printed_membrane_isotropic. --extra merges a JSON object into every scenario,
+by section (e.g. '{"geometry": {"lv_fibre_angle_deg": 0}}').
 """
 import argparse
 import json
