@@ -301,6 +301,9 @@ void check_consistency(const Scenario& s, std::vector<std::string>& errors) {
            s.structure.law + "\"");
     const bool walls = s.scene == "electromechanics" || s.scene == "fsi" || s.scene == "fsei" ||
                        (s.scene == "mechanics" && s.structure.walls == "chamber");
+    if ((s.scene == "fsi" || s.scene == "fsei") && s.fsei.aorta.pretension == "prestress")
+      fail("structure.membrane = \"triangles\" is not allowed with fsei.aorta.pretension = \"prestress\" (the "
+           "pre-stress sets the springs' rest lengths, which the triangles do not use); allowed: \"outer_load\"");
     if (walls && s.electromechanics.spring_law != "fung")
       fail("structure.membrane = \"triangles\" takes electromechanics.spring_law = \"fung\" for the chamber walls; "
            "got \"" + s.electromechanics.spring_law + "\"");

@@ -280,6 +280,11 @@ struct Scenario {
   double period_ms() const { return 60000.0 / heart_rate_bpm; }
 };
 
+// Scene "mechanics": structure.walls = "chamber" needs body "lv" or "left_heart";
+// structure.protocol = "pv_relations" needs body "lv", an ESPVR range that rises, and something
+// to measure. Appends one message per problem (parse_scenario runs it; so does the scene registry).
+void check_mechanics_rules(const Scenario& scenario, std::vector<std::string>& errors);
+
 // Every default from the parameter table: the seed's healthy left heart at 70 bpm.
 Scenario default_scenario();
 
@@ -303,10 +308,6 @@ void apply_override(nlohmann::json& document, const std::string& assignment);
 
 // Scenes known to the project and the ones this build can run. A known but unimplemented
 // scene is rejected with a message listing the implemented ones (never a silent fallback).
-// Scene "mechanics": structure.walls = "chamber" needs structure.body "lv" or "left_heart".
-// Appends one message per problem (parse_scenario runs it; so does the scene registry).
-void check_mechanics_rules(const Scenario& scenario, std::vector<std::string>& errors);
-
 const std::vector<std::string>& known_scenes();
 const std::vector<std::string>& implemented_scenes();
 

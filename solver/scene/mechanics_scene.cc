@@ -204,6 +204,31 @@ double mean_abs_strain(const ShellModel& m) {
   return eps.empty() ? 0 : s / static_cast<double>(eps.size());
 }
 
+// The metrics of the bodies' current state (mechanics_metric_names' state part, the per-body
+// volumes and strains, and the LV wall's readings for bodies "lv" and "left_heart").
+void add_state_metrics(const Bodies& bodies, const config::Structure& st, std::map<std::string, double>& m) {
+  const ShellModel& main = bodies[0];
+  const auto e = main.energies();
+  m["volume_initial_ml"] = bodies.volume0_mm3.front() * 1e-3;
+  m["volume_final_ml"] = main.cavity_volume_mm3() * 1e-3;
+  m["volume_change_percent"] = 100 * (main.cavity_volume_mm3() / bodies.volume0_mm3.front() - 1);
+  m["max_strain"] = main.max_abs_strain();
+  m["mean_strain"] = mean_abs_strain(main);
+  m["kinetic_energy_final_uj"] = e.kinetic_uj;
+  m["elastic_energy_final_uj"] = e.elastic_uj;
+  m["bending_energy_final_uj"] = e.bending_uj;
+  m["contact_pairs_final"] = bodies.group->contact_stats().active;
+  if (bodies.size() > 1 || st.body == "lv") {
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const ShellModel& b = bodies[k];
+      m[b.name() + "_volume_initial_ml"] = bodies.volume0_mm3[k] * 1e-3;
+      m[b.name() + "_volume_final_ml"] = b.cavity_volume_mm3() * 1e-3;
+      m[b.name() + "_max_strain"] = b.max_abs_strain();
+    }
+  }
+  if (st.body == "lv" || st.body == "left_heart") add_lv_wall_readings(main, "lv_", m);  // the LV is body 0
+}
+
 // --- protocol "pv_relations" ----------------------------------------------------------------
 // The LV (body 0) loaded by a cavity pressure and a uniform active tension (times the active share).
 void set_lv_loads(Bodies& bodies, double p_mmhg, double tau_kpa) {
@@ -218,17 +243,17 @@ void set_lv_loads(Bodies& bodies, double p_mmhg, double tau_kpa) {
 // cavity volume changes by < 1e-6 of itself over an interval and the kinetic energy is < 1e-9 of
 // the elastic (ours); returns the volume (ml). Throws std::runtime_error naming the point when the
 // hold passes structure.end_time_ms.
-double load_to_rest(Bodies& bodies, const config::Structure& st, double p0, double p1, double tau0, double tau1,
-                    RunControl& control, long& substeps) {
+double load_to_rest(Bodies& bodies, const config::Structure& st, double p0_mmhg, double p1_mmhg, double tau0_kpa,
+                    double tau1_kpa, RunControl& control, long& substeps) {
   const double ramp = st.pressure_ramp_ms, step = ramp > 0 ? ramp / 50 : 0;
   for (double t = 0; t < ramp - 1e-12;) {
     if (control.cancel_requested()) throw Cancelled();
     const double te = std::min(ramp, t + step), w = 0.5 * (t + te) / ramp;
-    set_lv_loads(bodies, p0 + w * (p1 - p0), tau0 + w * (tau1 - tau0));
+    set_lv_loads(bodies, p0_mmhg + w * (p1_mmhg - p0_mmhg), tau0_kpa + w * (tau1_kpa - tau0_kpa));
     substeps += bodies.group->advance(te - t).substeps;
     t = te;
   }
-  set_lv_loads(bodies, p1, tau1);
+  set_lv_loads(bodies, p1_mmhg, tau1_kpa);
   double v = bodies[0].cavity_volume_mm3(), held = 0;
   for (;;) {
     if (control.cancel_requested()) throw Cancelled();
@@ -241,19 +266,60 @@ double load_to_rest(Bodies& bodies, const config::Structure& st, double p0, doub
     if (rest) return v * 1e-3;
     if (held >= st.end_time_ms) {
       std::ostringstream m;
-      m << "mechanics pv_relations: the LV did not come to rest at " << p1 << " mmHg and " << tau1
-        << " kPa within structure.end_time_ms = " << st.end_time_ms << " ms (volume " << v * 1e-3
+      m << "did not come to rest at " << p1_mmhg << " mmHg and " << tau1_kpa
+        << " kPa within structure.end_time_ms = " << st.end_time_ms << " ms of hold (volume " << v * 1e-3
         << " ml, kinetic / elastic energy " << e.kinetic_uj / std::abs(e.elastic_uj)
         << "); raise structure.end_time_ms or structure.damping_per_ms";
-      throw std::runtime_error(m.str());
+      std::ostringstream place;
+      place << "body lv, protocol pv_relations point " << p1_mmhg << " mmHg";
+      throw InstabilityError("structure", place.str(), bodies[0].time_ms() * 1e-3, m.str());
     }
   }
+}
+
+// The fits of the measured points into `m`; a fit that cannot be made is a note, not an error (the
+// points stay in pv_relations.csv).
+void add_pv_fits(const std::vector<PvPoint>& ed, const std::vector<PvPoint>& es, RunResult& result) {
+  auto& m = result.metrics;
+  try {
+    if (!ed.empty()) {
+      const EdpvrFit f = fit_edpvr(ed);
+      m["edpvr_v0_ml"] = f.v0_ml;
+      m["edpvr_a_mmhg"] = f.a_mmhg;
+      m["edpvr_beta_per_ml"] = f.beta_per_ml;
+      m["edpvr_fit_rms_mmhg"] = f.rms_mmhg;
+      m["edpvr_volume_at_max_ml"] = ed.back().volume_ml;
+    }
+  } catch (const std::invalid_argument& e) {
+    result.notes.push_back(std::string("no EDPVR fit: ") + e.what());
+  }
+  try {
+    if (!es.empty()) {
+      const EspvrFit f = fit_espvr(es);
+      m["espvr_e_es_mmhg_per_ml"] = f.e_es_mmhg_per_ml;
+      m["espvr_v0_ml"] = f.v0_ml;
+      m["espvr_fit_r2"] = f.r2;
+      m["espvr_volume_at_min_ml"] = es.front().volume_ml;
+      m["espvr_volume_at_max_ml"] = es.back().volume_ml;
+    }
+  } catch (const std::invalid_argument& e) {
+    result.notes.push_back(std::string("no ESPVR fit: ") + e.what());
+  }
+}
+
+void write_pv_points(const std::filesystem::path& dir, const std::vector<PvPoint>& ed, const std::vector<PvPoint>& es) {
+  std::filesystem::create_directories(dir);
+  std::ofstream csv(dir / "pv_relations.csv");
+  csv << "relation,pressure_mmhg,volume_ml\n";
+  for (const PvPoint& q : ed) csv << "edpvr," << q.pressure_mmhg << "," << q.volume_ml << "\n";
+  for (const PvPoint& q : es) csv << "espvr," << q.pressure_mmhg << "," << q.volume_ml << "\n";
 }
 
 RunResult run_pv_relations(const config::Scenario& scenario, RunControl& control) {
   const config::Structure& st = scenario.structure;
   const auto start = std::chrono::steady_clock::now();
   Bodies bodies = build_bodies(scenario);
+  const double dt0 = bodies.group->stable_step_ms();
   const int n = st.pv_points;
   std::vector<PvPoint> ed, es;
   long substeps = 0;
@@ -261,66 +327,52 @@ RunResult run_pv_relations(const config::Scenario& scenario, RunControl& control
   int done = 0;
   auto progress = [&](const char* relation, double p_mmhg) {
     std::ostringstream what;
-    what << relation << " point at " << p_mmhg << " mmHg at rest";
+    what << "mechanics pv_relations: " << relation << " point at " << p_mmhg << " mmHg at rest";
     ProgressReport r;
     r.beat = 1;
     r.beats_total = 1;
     r.fraction = total > 0 ? static_cast<double>(++done) / total : 1;
-    r.message = "mechanics pv_relations: " + what.str();
+    r.message = what.str();
     control.on_progress(r);
   };
-  double p = 0;
+  double p_mmhg = 0, tau_kpa = 0;
   if (st.edpvr_max_mmhg > 0) {
     ed.push_back({0, bodies[0].cavity_volume_mm3() * 1e-3});
     for (int k = 1; k <= n; ++k) {
       const double pk = st.edpvr_max_mmhg * k / n;
-      ed.push_back({pk, load_to_rest(bodies, st, p, pk, 0, 0, control, substeps)});
-      p = pk;
+      ed.push_back({pk, load_to_rest(bodies, st, p_mmhg, pk, 0, 0, control, substeps)});
+      p_mmhg = pk;
       progress("EDPVR", pk);
     }
   }
-  if (st.active_tension_kpa > 0) {
-    double tau = 0;
-    for (int k = 0; k < n; ++k) {
-      const double pk = st.espvr_min_mmhg + (st.espvr_max_mmhg - st.espvr_min_mmhg) * k / (n - 1);
-      es.push_back({pk, load_to_rest(bodies, st, p, pk, tau, st.active_tension_kpa, control, substeps)});
-      p = pk;
-      tau = st.active_tension_kpa;
-      progress("ESPVR", pk);
-    }
+  for (int k = 0; st.active_tension_kpa > 0 && k < n; ++k) {
+    const double pk = st.espvr_min_mmhg + (st.espvr_max_mmhg - st.espvr_min_mmhg) * k / (n - 1);
+    es.push_back({pk, load_to_rest(bodies, st, p_mmhg, pk, tau_kpa, st.active_tension_kpa, control, substeps)});
+    p_mmhg = pk;
+    tau_kpa = st.active_tension_kpa;
+    progress("ESPVR", pk);
   }
   RunResult result;
-  auto& m = result.metrics;
-  m["volume_initial_ml"] = bodies.volume0_mm3.front() * 1e-3;
-  m["substeps"] = static_cast<double>(substeps);
-  m["nodes"] = static_cast<double>(bodies[0].node_count());
-  if (!ed.empty()) {
-    const EdpvrFit f = fit_edpvr(ed);
-    m["edpvr_v0_ml"] = f.v0_ml;
-    m["edpvr_a_mmhg"] = f.a_mmhg;
-    m["edpvr_beta_per_ml"] = f.beta_per_ml;
-    m["edpvr_fit_rms_mmhg"] = f.rms_mmhg;
-    m["edpvr_volume_at_max_ml"] = ed.back().volume_ml;
-  }
-  if (!es.empty()) {
-    const EspvrFit f = fit_espvr(es);
-    m["espvr_e_es_mmhg_per_ml"] = f.e_es_mmhg_per_ml;
-    m["espvr_v0_ml"] = f.v0_ml;
-    m["espvr_fit_r2"] = f.r2;
-    m["espvr_volume_at_min_ml"] = es.front().volume_ml;
-    m["espvr_volume_at_max_ml"] = es.back().volume_ml;
-    add_lv_wall_readings(bodies[0], "lv_", m);  // at the ESPVR's highest pressure
-  }
   const std::filesystem::path dir = control.output_directory();
   if (!dir.empty() && is_rank_zero()) {
-    std::filesystem::create_directories(dir);
-    std::ofstream csv(dir / "pv_relations.csv");
-    csv << "relation,pressure_mmhg,volume_ml\n";
-    for (const PvPoint& q : ed) csv << "edpvr," << q.pressure_mmhg << "," << q.volume_ml << "\n";
-    for (const PvPoint& q : es) csv << "espvr," << q.pressure_mmhg << "," << q.volume_ml << "\n";
+    write_pv_points(dir, ed, es);
     result.notes.push_back("the measured points in pv_relations.csv (plot: client/systole-plot-pv)");
   }
-  m["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  auto& m = result.metrics;
+  add_state_metrics(bodies, st, m);  // the last point's state (the ESPVR's highest pressure, if any)
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m["stable_step_initial_ms"] = dt0;
+  m["stable_step_final_ms"] = bodies.group->stable_step_ms();
+  m["substeps"] = static_cast<double>(substeps);
+  m["nodes"] = static_cast<double>(bodies[0].node_count());
+  m["node_substeps_per_s"] = wall_s > 0 ? static_cast<double>(substeps) * m["nodes"] / wall_s : 0;
+  m["end_time_ms"] = bodies[0].time_ms();
+  m["positions_written"] = 0;
+  m["contact_pairs_max"] = bodies.group->contact_stats().active;
+  m["contact_crossed_max"] = bodies.group->contact_stats().crossed;
+  m["contact_min_gap_mm"] = st.contact_distance_mm;
+  add_pv_fits(ed, es, result);
+  m["wall_time_s"] = wall_s;
   return result;
 }
 
@@ -435,17 +487,8 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
     result.notes.push_back("positions were requested but the caller gave no output directory: none written");
   }
 
-  const ShellModel& main = bodies[0];
-  const auto e = main.energies();
   auto& m = result.metrics;
-  m["volume_initial_ml"] = bodies.volume0_mm3.front() * 1e-3;
-  m["volume_final_ml"] = main.cavity_volume_mm3() * 1e-3;
-  m["volume_change_percent"] = 100 * (main.cavity_volume_mm3() / bodies.volume0_mm3.front() - 1);
-  m["max_strain"] = main.max_abs_strain();
-  m["mean_strain"] = mean_abs_strain(main);
-  m["kinetic_energy_final_uj"] = e.kinetic_uj;
-  m["elastic_energy_final_uj"] = e.elastic_uj;
-  m["bending_energy_final_uj"] = e.bending_uj;
+  add_state_metrics(bodies, st, m);
   m["stable_step_initial_ms"] = dt0;
   m["stable_step_final_ms"] = group.stable_step_ms();
   m["substeps"] = static_cast<double>(substeps);
@@ -453,19 +496,9 @@ RunResult run_mechanics(const config::Scenario& scenario, RunControl& control) {
   m["node_substeps_per_s"] = loop_s > 0 ? static_cast<double>(substeps) * nodes / loop_s : 0;
   m["end_time_ms"] = t;
   m["positions_written"] = writer ? 1 : 0;
-  m["contact_pairs_final"] = group.contact_stats().active;
   m["contact_pairs_max"] = contact_max;
   m["contact_crossed_max"] = crossed_max;
   m["contact_min_gap_mm"] = min_gap;
-  if (bodies.size() > 1 || st.body == "lv") {
-    for (std::size_t k = 0; k < bodies.size(); ++k) {
-      const ShellModel& b = bodies[k];
-      m[b.name() + "_volume_initial_ml"] = bodies.volume0_mm3[k] * 1e-3;
-      m[b.name() + "_volume_final_ml"] = b.cavity_volume_mm3() * 1e-3;
-      m[b.name() + "_max_strain"] = b.max_abs_strain();
-    }
-  }
-  if (st.body == "lv" || st.body == "left_heart") add_lv_wall_readings(main, "lv_", m);  // the LV is body 0
   if (st.body == "mitral_leaflets") {
     // Largest displacement of a leaflet node towards the LA (-z) from the built valve, to compare
     // with the limiter.

@@ -19,6 +19,8 @@
 // springs' convention for cos^2 phi = 1/2.
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <string>
 
 #include "solver/core/errors.h"
@@ -36,6 +38,14 @@ Mat32 deformation_gradient(const std::vector<Vec3>& x, const std::int32_t node[3
     F.col(1) += g[k][1] * x[node[k]];
   }
   return F;
+}
+
+// True when the triangle's deformed fibre and cross-fibre vectors span a plane (it has not
+// collapsed to a segment or a point); the energy is unbounded there, so a state reaching it is a
+// failure, not a value.
+bool spans_plane(const Mat32& F) {
+  const Vec3 a = F.col(0), b = F.col(1);
+  return a.cross(b).norm() > 1e-12 * a.norm() * b.norm() && a.norm() > 0 && b.norm() > 0;
 }
 
 // Q and its gradients dQ/da, dQ/db / 2 (so that dW/da = s A0 c e^Q qa), and what the stable
@@ -106,11 +116,22 @@ void ShellModel::build_membrane(const ShellMaterials& materials) {
 // (its axial curvature and the transverse rate dW/dlambda / lambda) and the shear term
 // c e^Q alpha_c (1 + 2Q) |d gamma|^2 (1 + |gamma|) (the curvature of gamma^2 / 2 taken as
 // |d gamma|^2 (1 + |gamma|)); a node's row gets twice their sum times sqrt(3) |g_k| sum_l |g_l|.
+void ShellModel::throw_collapsed_triangle(const MembraneTriangle& t, const std::vector<Vec3>& x) const {
+  std::ostringstream what;
+  what << "membrane triangle (nodes " << t.node[0] << ", " << t.node[1] << ", " << t.node[2]
+       << ") collapsed: its deformed fibre and cross-fibre directions no longer span a plane, or its energy "
+          "overflowed (at ("
+       << x[t.node[0]].x() << ", " << x[t.node[0]].y() << ", " << x[t.node[0]].z() << ") mm)";
+  throw_instability(t.node[0], what.str());
+}
+
 void ShellModel::add_membrane_forces(const std::vector<Vec3>& x, std::vector<Vec3>& f, double* row) const {
   for (const MembraneTriangle& t : membrane_) {
     const Mat32 F = deformation_gradient(x, t.node, t.g);
+    if (!spans_plane(F)) throw_collapsed_triangle(t, x);
     const FungState st = fung_state(F, t.alpha_f, t.alpha_c);
     const double vce = t.volume_mm3 * t.c_kpa * std::exp(st.q);  // dW/dQ = vce / 2
+    if (!std::isfinite(vce)) throw_collapsed_triangle(t, x);
     for (int k = 0; k < 3; ++k) f[t.node[k]] -= vce * (st.qa * t.g[k][0] + st.qb * t.g[k][1]);
     if (row == nullptr) continue;
     const double l2 = st.lam_min * st.lam_min, amax = std::max(t.alpha_f, t.alpha_c);
@@ -126,7 +147,9 @@ void ShellModel::add_membrane_forces(const std::vector<Vec3>& x, std::vector<Vec
 double ShellModel::membrane_energy(const std::vector<Vec3>& x) const {
   double w = 0;
   for (const MembraneTriangle& t : membrane_) {
-    const FungState st = fung_state(deformation_gradient(x, t.node, t.g), t.alpha_f, t.alpha_c);
+    const Mat32 F = deformation_gradient(x, t.node, t.g);
+    if (!spans_plane(F)) return std::numeric_limits<double>::infinity();
+    const FungState st = fung_state(F, t.alpha_f, t.alpha_c);
     w += t.volume_mm3 * 0.5 * t.c_kpa * std::expm1(st.q);
   }
   return w;

@@ -856,7 +856,7 @@ void ShellModel::check_energy_growth(EnergyWatch& watch, double dt, double dt_st
   const double ke = kinetic_energy_uj();
   const bool grew = watch.kinetic_uj > 0 && ke > 1e3 * watch.kinetic_uj;
   if (grew && watch.grew) {
-    const double pot = spring_energy(x_) + area_floor_energy(x_) + bending_energy(x_);
+    const double pot = spring_energy(x_) + area_floor_energy(x_) + membrane_energy(x_) + bending_energy(x_);
     if (ke > pot) {
       std::size_t worst = 0;
       for (std::size_t i = 1; i < node_count(); ++i)

@@ -280,7 +280,7 @@ class ShellModel {
   };
   // A constant-strain membrane triangle (options.membrane = "triangles"): reference gradients of
   // its three shape functions in the (fibre, cross-fibre) frame of its stress-free plane, so that
-  // F = sum_k x_k g_k^T (3 x 2) and E = (F^T F - I)/2 are in the fibre frame.
+  // F = sum_k x_k g_k^T (3 x 2) maps the reference fibre and cross-fibre directions to F f0, F c0.
   struct MembraneTriangle {
     std::int32_t node[3];
     double g[3][2];
@@ -288,6 +288,8 @@ class ShellModel {
     double c_kpa, alpha_f, alpha_c;
   };
   void build_membrane(const ShellMaterials& materials);  // membrane_ from the stress-free mesh (membrane.cc)
+  // InstabilityError naming the triangle whose deformed frame collapsed (membrane.cc).
+  [[noreturn]] void throw_collapsed_triangle(const MembraneTriangle& t, const std::vector<Vec3>& x) const;
   void compute_forces();  // force_ at x_, records the worst strain
   void internal_forces_range(Vec3* f, double* row, std::int32_t s0, std::int32_t s1, std::int32_t h0, std::int32_t h1,
                              double& worst, std::int32_t& worst_edge, std::int32_t& bad) const;

@@ -8,6 +8,7 @@
 #include "solver/geometry/diagnostics.h"
 #include "solver/geometry/left_heart.h"
 #include "solver/scene/lv_wall_readings.h"
+#include "solver/scene/mechanics_scene.h"
 #include "solver/scene/pv_relations.h"
 #include "solver/scene/scene.h"
 #include "solver/structure/shell.h"
@@ -112,6 +113,21 @@ TEST(MechanicsScene, ChamberWallsNeedAnLvBody) {
       config::parse_scenario({{"scene", "mechanics"}, {"structure", {{"walls", "chamber"}, {"body", "lv"}}}}));
 }
 
+// The membrane triangles take the printed law, and not the aorta's pre-stress (which sets the
+// springs' rest lengths): refused at parse.
+TEST(MechanicsScene, MembraneTrianglesRefuseWhatTheyCannotCarry) {
+  EXPECT_THROW(config::parse_scenario({{"scene", "mechanics"},
+                                       {"structure", {{"membrane", "triangles"}, {"law", "linear"}}}}),
+               InputError);
+  EXPECT_NO_THROW(config::parse_scenario({{"scene", "mechanics"},
+                                          {"structure", {{"membrane", "triangles"}, {"law", "fung"}}}}));
+  EXPECT_THROW(config::parse_scenario({{"scene", "fsi"},
+                                       {"structure", {{"membrane", "triangles"}, {"law", "fung"}}},
+                                       {"electromechanics", {{"spring_law", "fung"}}},
+                                       {"fsei", {{"aorta", {{"pretension", "prestress"}}}}}}),
+               InputError);
+}
+
 // The LV wall's readings on motions with known answers: a uniform scaling by 0.9 about the base
 // centre gives every edge eps = (l - l0)/l = -0.1/0.9, global strains of -10 %, a fibre stretch
 // of 0.9 and no twist; a rigid rotation about the long axis gives no strain and no twist.
@@ -196,6 +212,7 @@ TEST(MechanicsScene, PvRelationsMatchASingleRampToTheSameLoads) {
   EXPECT_GT(m.at("edpvr_beta_per_ml"), 0);
   EXPECT_GT(m.at("espvr_e_es_mmhg_per_ml"), 0);
   EXPECT_GT(m.at("espvr_volume_at_max_ml"), m.at("espvr_volume_at_min_ml"));
+  for (const auto& name : mechanics_metric_names()) EXPECT_TRUE(m.count(name)) << name;  // campaigns can name them
   nlohmann::json ramp = base;
   ramp["structure"]["cavity_pressure_mmhg"] = 80;
   Control c2({});
